@@ -1,0 +1,23 @@
+"""neurocog_gym: Gymnasium environments for neuro-cognitive quadruped locomotion.
+
+Importing the package registers every environment id (SPEC §9):
+
+* ``NeuroCog/Walk-v0`` — flat-ground trotting on the CPG.
+"""
+
+from __future__ import annotations
+
+import os
+
+# Headless machines: pick EGL for offscreen rendering before mujoco is imported anywhere.
+if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+    os.environ.setdefault("MUJOCO_GL", "egl")
+
+from gymnasium.envs.registration import register  # noqa: E402
+
+__version__ = "0.1.0"
+__all__ = ["ENV_IDS", "__version__"]
+
+ENV_IDS: tuple[str, ...] = ("NeuroCog/Walk-v0",)
+
+register(id="NeuroCog/Walk-v0", entry_point="neurocog_gym.envs.walk:WalkEnv", max_episode_steps=2000)

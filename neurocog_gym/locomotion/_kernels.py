@@ -1,0 +1,151 @@
+"""numba kernels of the locomotion generator: Matsuoka CPG (Eq. 5-7) and motor-neuron pools
+(Eq. 8-11). Pure functions over NumPy arrays; the classes in ``cpg.py`` and ``motor.py`` own the
+state and call these once per 0.01 s control cycle."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, fastmath=False)
+def matsuoka_step(x, v, W, V, s, u0, b, tau, T, tau_f, dt_units, n_sub):
+    """Advance the Matsuoka network in place by ``n_sub`` explicit-Euler sub-steps.
+
+    Eq. (5): tau dx_i/dt = (u0 - x_i - sum_j W_ij y_j + sum_l V_il s_l - b v_i) tau_f
+    Eq. (6): T dv_i/dt = (y_i - v_i) tau_f
+    Eq. (7): y_i = max(x_i, 0)
+
+    Args:
+        x: (n,) inner states, updated in place.
+        v: (n,) self-inhibition (adaptation) states, updated in place.
+        W: (n, n) weight from neuron j to neuron i.
+        V: (n, L) weight from sensor l to neuron i.
+        s: (L,) sensor inputs.
+        u0: tonic input x_0 (Table 3's u0).
+        b: adaptation gain.
+        tau: rise time constant, in CPG time units.
+        T: adaptation time constant, in CPG time units.
+        tau_f: frequency scale (multiplies both right-hand sides).
+        dt_units: length of one sub-step in CPG time units.
+        n_sub: number of sub-steps.
+
+    Returns:
+        (n,) the outputs y after the last sub-step.
+    """
+    n = x.shape[0]
+    nl = s.shape[0]
+    y = np.empty(n)
+    sens = np.zeros(n)
+    for i in range(n):
+        acc = 0.0
+        for l in range(nl):
+            acc += V[i, l] * s[l]
+        sens[i] = acc
+    for _ in range(n_sub):
+        for i in range(n):
+            y[i] = x[i] if x[i] > 0.0 else 0.0
+        for i in range(n):
+            inh = 0.0
+            for j in range(n):
+                inh += W[i, j] * y[j]
+            dx = (u0 - x[i] - inh + sens[i] - b * v[i]) * tau_f / tau
+            dv = (y[i] - v[i]) * tau_f / T
+            x[i] += dt_units * dx
+            v[i] += dt_units * dv
+    for i in range(n):
+        y[i] = x[i] if x[i] > 0.0 else 0.0
+    return y
+
+
+@njit(cache=True, inline="always")
+def force_length(theta, theta_opt, width, c):
+    """Eq. (9): F_l = exp(c |(theta - theta_opt) / (theta_R omega)|^3), c = ln 0.05."""
+    r = abs((theta - theta_opt) / width)
+    return np.exp(c * r * r * r)
+
+
+@njit(cache=True, inline="always")
+def force_velocity(v_muscle, v_max, K, N):
+    """Eq. (10), Hill-type force-velocity factor (Geyer-Herr form, continuous at 0).
+
+    ``v_muscle < 0`` is shortening: (v_max + v) / (v_max - K v), 1 at rest, 0 at -v_max.
+    ``v_muscle >= 0`` is lengthening: N - (N - 1) (v_max - v) / (7.56 K v + v_max), 1 at rest,
+    rising towards N. The paper prints both branches with sign slips that make them disagree at
+    v = 0; this is the form of the Hill model it cites.
+    """
+    if v_muscle < 0.0:
+        if v_muscle <= -v_max:
+            return 0.0
+        return (v_max + v_muscle) / (v_max - K * v_muscle)
+    return N - (N - 1.0) * (v_max - v_muscle) / (7.56 * K * v_muscle + v_max)
+
+
+@njit(cache=True)
+def motor_neuron_step(
+    q_ref, qd_ref, drive, theta_int, theta, theta_dot, touch, posture,
+    mu1, mu2, acc_max, vel_max, fl_width, fl_c, fv_K, fv_N, Z,
+    k_rest, d_rest, q_lo, q_hi, dt, acc_out,
+):  # fmt: skip
+    """One control cycle of the 12 motor-neuron pools (Eq. 8, 9, 10, 11), in place.
+
+    Eq. (8): theta_dd = (mu1 y + mu2 Theta) theta_dd_MAX F_l(theta) F_v(theta_dot) + S, with y the
+    CPG drive of the joint (flexor minus extensor output through the synapses m_i) and Theta the
+    AEF interrupt; the activation is clipped to [-1, 1]. Eq. (11): S = sum_l z_il s_l.
+    The servos are angle-driven, so the acceleration is integrated (semi-implicit Euler) into the
+    position target ``q_ref``. Our addition, not in the paper: a visco-elastic restoring term
+    -k (q_ref - posture) - d q_ref_dot (the passive muscle-tendon of the pool); without it a double
+    integrator of a pulse train drifts. With it each joint is a driven second-order system whose
+    response to the CPG's half-wave bursts is a smooth swing, and an interrupt is a transient.
+    The target rate stays within the servo speed ``vel_max`` and the target within the joint range.
+
+    Args:
+        q_ref: (12,) servo target angles, rad; updated in place.
+        qd_ref: (12,) servo target rates, rad/s; updated in place.
+        drive: (12,) CPG drive y of each joint, dimensionless.
+        theta_int: (12,) interrupt Theta in [-1, 1] (the AEF's joint group).
+        theta, theta_dot: (12,) measured joint angles (rad) and rates (rad/s).
+        touch: (4,) touch inputs s_l.
+        posture: (12,) rest angles, also theta_opt of Eq. (9), rad.
+        mu1, mu2: Eq. (8) input gains.
+        acc_max, vel_max: (12,) theta_dd_MAX (rad/s^2) and theta_dot_MAX (rad/s).
+        fl_width: (12,) Eq. (9) theta_R * omega, rad.
+        fl_c: Eq. (9) c = ln 0.05.
+        fv_K, fv_N: Eq. (10) curvature K and eccentric force ratio N.
+        Z: (12, 4) Eq. (11) touch weights z_il, rad/s^2.
+        k_rest, d_rest: restoring stiffness (1/s^2) and damping (1/s).
+        q_lo, q_hi: (12,) joint range, rad.
+        dt: control cycle, s.
+        acc_out: (12,) output, the Eq. (8) acceleration (without the restoring term).
+    """
+    n = q_ref.shape[0]
+    for i in range(n):
+        a = mu1 * drive[i] + mu2 * theta_int[i]
+        if a > 1.0:
+            a = 1.0
+        elif a < -1.0:
+            a = -1.0
+        # The active muscle shortens when the joint moves the way it pulls.
+        v_muscle = -theta_dot[i] if a >= 0.0 else theta_dot[i]
+        fl = force_length(theta[i], posture[i], fl_width[i], fl_c)
+        fv = force_velocity(v_muscle, vel_max[i], fv_K, fv_N)
+        s = 0.0
+        for l in range(touch.shape[0]):
+            s += Z[i, l] * touch[l]
+        acc = a * acc_max[i] * fl * fv + s
+        acc_out[i] = acc
+        acc -= k_rest * (q_ref[i] - posture[i]) + d_rest * qd_ref[i]
+        qd = qd_ref[i] + acc * dt
+        if qd > vel_max[i]:
+            qd = vel_max[i]
+        elif qd < -vel_max[i]:
+            qd = -vel_max[i]
+        q = q_ref[i] + qd * dt
+        if q > q_hi[i]:
+            q = q_hi[i]
+            qd = 0.0
+        elif q < q_lo[i]:
+            q = q_lo[i]
+            qd = 0.0
+        q_ref[i] = q
+        qd_ref[i] = qd

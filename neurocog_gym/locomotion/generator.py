@@ -1,0 +1,145 @@
+"""The locomotion generator of §5 (Fig. 6): walking provision -> CPG -> motor-neuron pools.
+
+One call of :meth:`LocomotionGenerator.step` is one 0.01 s control cycle. Inputs are the AEF's two
+output groups — the walking provision (s_SAG, s_COR, s_DIR) and the 12-joint interrupt Theta —
+and the proprioception; the output is the 12 servo position targets.
+
+How the walking provision enters the CPG (§5.2 says only that the three values go to the CPG; this
+is our reading, each value in [-1, 1], 0 = the gait as tuned):
+
+* s_SAG scales the hip-flexion drive (stride length) by ``1 + sag_gain * s_SAG``.
+* s_DIR turns: left hips scale by ``1 - dir_gain * s_DIR``, right hips by ``1 + dir_gain * s_DIR``
+  (positive turns left, counter-clockwise seen from above).
+* s_COR steps sideways: each abduction joint adds ``cor_gain * s_COR`` times the hip's
+  protraction drive, so a swinging foot moves to +y (left) for positive s_COR and pushes back in
+  stance.
+The provision is low-pass filtered (``provision_tau``): the CPG is a medium-term process (§5).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from neurocog_gym.locomotion.cpg import CPGParams, MatsuokaCPG
+from neurocog_gym.locomotion.gait import Gait
+from neurocog_gym.locomotion.motor import MotorNeuronPools, MotorParams
+
+# Joint j = 3 * leg + k (k: 0 abduct, 1 hip, 2 knee) is driven by neurons (flexor, extensor):
+_JOINT_NEURONS = np.array(
+    [[6 * leg + n for n in pair] for leg in range(4) for pair in ((4, 5), (0, 1), (2, 3))]
+)
+# Sign that turns "flexor active" into the joint acceleration: hip flexor protracts (angle
+# decreases), knee flexor folds (increases), abduction flexor moves the foot outwards.
+_SIDE = np.array([1.0, -1.0, 1.0, -1.0])  # FL, FR, HL, HR: +y is outwards for left legs
+_JOINT_SIGN = np.array([s for leg in range(4) for s in (_SIDE[leg], -1.0, 1.0)])
+HIP_JOINTS = np.array([3 * leg + 1 for leg in range(4)])
+ABDUCT_JOINTS = np.array([3 * leg for leg in range(4)])
+
+
+@dataclass(frozen=True)
+class ProvisionParams:
+    """How the walking provision modulates the CPG pattern (our reading, module docstring)."""
+
+    sag_gain: float = 0.6
+    """Fractional stride change per unit s_SAG."""
+    dir_gain: float = 0.5
+    """Fractional left/right stride difference per unit s_DIR."""
+    cor_gain: float = 0.6
+    """Abduction drive per unit s_COR, relative to the hip's protraction drive."""
+    provision_tau: float = 0.15
+    """Low-pass time constant of the provision, s."""
+
+
+class LocomotionGenerator:
+    """CPG + motor-neuron pools for one robot (Fig. 6), with touch feedback.
+
+    Args:
+        gait: the gait (chromosome, synapses, posture).
+        q_lo, q_hi: (12,) joint ranges, rad.
+        dt: control cycle, s.
+        cpg_params, motor_params, provision_params: component constants.
+    """
+
+    def __init__(
+        self,
+        gait: Gait,
+        q_lo: np.ndarray,
+        q_hi: np.ndarray,
+        dt: float = 0.01,
+        cpg_params: CPGParams | None = None,
+        motor_params: MotorParams | None = None,
+        provision_params: ProvisionParams | None = None,
+    ):
+        from dataclasses import replace
+
+        self.gait = gait
+        self.dt = dt
+        cpg_params = replace(cpg_params or CPGParams(), tau_f=gait.tau_f)
+        self.cpg = MatsuokaCPG(gait.genes_array, cpg_params, dt)
+        self.posture = np.asarray(gait.posture, dtype=np.float64)
+        self.g_flex = np.asarray(gait.flexor_gain, dtype=np.float64) * _JOINT_SIGN
+        self.g_ext = np.asarray(gait.extensor_gain, dtype=np.float64) * _JOINT_SIGN
+        motor_params = replace(
+            motor_params or MotorParams(),
+            acc_max=(gait.acc_max,) * 12,
+            k_rest=gait.k_rest,
+            d_rest=gait.d_rest,
+        )
+        self.pools = MotorNeuronPools(self.posture, q_lo, q_hi, motor_params, dt)
+        self.prov = provision_params or ProvisionParams()
+        self.provision = np.zeros(3)
+        self.drive = np.zeros(12)
+        self.hip_drive = np.zeros(4)
+
+    def reset(self, rng: np.random.Generator | None = None, noise: float = 0.05) -> None:
+        """Reset to the standing posture with the CPG started in a trot phase.
+
+        The inner states start from a fixed pattern (diagonal pairs FL+HR flexing, FR+HL
+        extending) plus uniform noise of size ``noise`` drawn from ``rng``.
+        """
+        x0 = np.zeros(24)
+        x0[[0, 18]] = 0.5  # FL and HR hip flexors
+        x0[[7, 13]] = 0.5  # FR and HL hip extensors
+        if rng is not None and noise > 0:
+            x0 += rng.uniform(-noise, noise, size=24)
+        self.cpg.reset(x0)
+        self.provision[:] = 0.0
+        self.drive[:] = 0.0
+        self.pools.reset(self.posture)
+
+    def _drive(self, y: np.ndarray) -> np.ndarray:
+        yf = y[_JOINT_NEURONS[:, 0]]
+        ye = y[_JOINT_NEURONS[:, 1]]
+        s_sag, s_cor, s_dir = self.provision
+        drive = self.g_flex * yf - self.g_ext * ye
+        scale = (1.0 + self.prov.sag_gain * s_sag) * (1.0 - self.prov.dir_gain * s_dir * _SIDE)
+        drive[HIP_JOINTS] *= scale
+        # Hip drive is negative while the leg protracts (swing); the foot then moves to +y.
+        drive[ABDUCT_JOINTS] += -self.prov.cor_gain * s_cor * drive[HIP_JOINTS]
+        self.hip_drive[:] = yf[HIP_JOINTS] - ye[HIP_JOINTS]
+        return drive
+
+    def step(self, provision, interrupt, theta, theta_dot, touch) -> np.ndarray:
+        """One control cycle.
+
+        Args:
+            provision: (3,) walking provision (s_SAG, s_COR, s_DIR) in [-1, 1].
+            interrupt: (12,) interrupt Theta in [-1, 1].
+            theta, theta_dot: (12,) measured joint angles and rates.
+            touch: (4,) normalised touch inputs (1 ~ a quarter of the body weight).
+
+        Returns:
+            (12,) servo position targets, rad.
+        """
+        a = self.dt / max(self.prov.provision_tau, self.dt)
+        self.provision += a * (np.asarray(provision, dtype=np.float64) - self.provision)
+        y = self.cpg.step(touch)
+        self.drive[:] = self._drive(y)
+        return self.pools.step(self.drive, interrupt, theta, theta_dot, touch)
+
+    @property
+    def swinging(self) -> np.ndarray:
+        """(4,) bool, legs whose hip flexor (protractor) currently dominates: the swing phase."""
+        return self.hip_drive > 0.0

@@ -1,0 +1,107 @@
+"""Motor-neuron pools, Eq. (8)-(11), §5.3: CPG pattern + interrupt -> joint angular acceleration.
+
+Each joint's pool turns its activation (mu1 times the CPG drive, flexor minus extensor output
+through the synapses m_i, plus mu2 times the AEF interrupt Theta) into a joint angular
+acceleration shaped by a Hill-type force-length (Eq. 9) and force-velocity (Eq. 10) factor plus a
+touch-sensor term (Eq. 11). The servos on the robot are angle-driven, so the acceleration is
+integrated into the position target (see ``_kernels.motor_neuron_step`` for the one term we add:
+a visco-elastic restoring force towards the posture).
+
+Reading of Eq. (8): the paper writes the CPG input as y with two dots; SPEC §5 and §5.3's text
+("signal outputs from the central pattern generator ... are used as the signal activation") make
+it the CPG output itself, which is what we use.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from neurocog_gym.locomotion._kernels import motor_neuron_step
+
+
+def _twelve(value: float) -> tuple[float, ...]:
+    return (float(value),) * 12
+
+
+@dataclass(frozen=True)
+class MotorParams:
+    """Motor-neuron pool constants (Eq. 8-11)."""
+
+    mu1: float = 1.0
+    """mu_1, gain of the CPG input, dimensionless (Eq. 8)."""
+    mu2: float = 1.0
+    """mu_2, gain of the interrupt Theta, dimensionless (Eq. 8)."""
+    acc_max: tuple[float, ...] = field(default_factory=lambda: _twelve(120.0))
+    """theta_dd_MAX per joint, rad/s^2 (Eq. 8; "chosen through preliminary testing")."""
+    vel_max: tuple[float, ...] = field(default_factory=lambda: _twelve(7.0))
+    """theta_dot_MAX per joint, rad/s: the servo's no-load speed (MX-64 class), Eq. (10)."""
+    fl_width: tuple[float, ...] = field(default_factory=lambda: _twelve(1.4))
+    """theta_R * omega, rad: distance from theta_opt where F_l falls to 0.05 (Eq. 9)."""
+    fl_c: float = float(np.log(0.05))
+    """c = ln 0.05 (Eq. 9)."""
+    fv_K: float = 1.0
+    """K, curvature of the Hill force-velocity curve, dimensionless (Eq. 10)."""
+    fv_N: float = 1.5
+    """N, eccentric force ratio F/F_max at lengthening, dimensionless (Eq. 10)."""
+    touch_weights: tuple[tuple[float, ...], ...] = field(
+        default_factory=lambda: tuple((0.0,) * 4 for _ in range(12))
+    )
+    """z_il, (12, 4) touch-sensor to motor-neuron weights, rad/s^2 (Eq. 11); zero by default."""
+    k_rest: float = 160.0
+    """Restoring stiffness towards the posture, 1/s^2 (our addition; natural frequency 2 Hz)."""
+    d_rest: float = 12.6
+    """Restoring damping, 1/s (damping ratio 0.5 with k_rest = 160)."""
+
+
+class MotorNeuronPools:
+    """Twelve motor-neuron pools that integrate Eq. (8) into servo position targets.
+
+    Args:
+        posture: (12,) rest angles and Eq. (9) optimum angles, rad (the standing posture).
+        q_lo, q_hi: (12,) joint range, rad.
+        params: pool constants.
+        dt: control cycle, s.
+    """
+
+    def __init__(self, posture, q_lo, q_hi, params: MotorParams | None = None, dt=0.01):
+        self.params = p = params or MotorParams()
+        self.dt = float(dt)
+        self.posture = np.asarray(posture, dtype=np.float64).copy()
+        self.q_lo = np.asarray(q_lo, dtype=np.float64).copy()
+        self.q_hi = np.asarray(q_hi, dtype=np.float64).copy()
+        self.acc_max = np.asarray(p.acc_max, dtype=np.float64)
+        self.vel_max = np.asarray(p.vel_max, dtype=np.float64)
+        self.fl_width = np.asarray(p.fl_width, dtype=np.float64)
+        self.Z = np.asarray(p.touch_weights, dtype=np.float64)
+        if self.Z.shape != (12, 4):
+            raise ValueError(f"MotorParams.touch_weights must be 12 x 4, got {self.Z.shape}")
+        self.q_ref = np.zeros(12)
+        self.qd_ref = np.zeros(12)
+        self.acc = np.zeros(12)
+
+    def reset(self, q0: np.ndarray) -> None:
+        """Start from servo targets ``q0`` (12,), at rest."""
+        self.q_ref[:] = q0
+        self.qd_ref[:] = 0.0
+        self.acc[:] = 0.0
+
+    def step(self, drive, interrupt, theta, theta_dot, touch) -> np.ndarray:
+        """One control cycle; returns the (12,) servo targets (a view of the internal buffer).
+
+        Args:
+            drive: (12,) CPG drive of each joint, dimensionless.
+            interrupt: (12,) Theta in [-1, 1].
+            theta, theta_dot: (12,) measured joint angles (rad) and rates (rad/s).
+            touch: (4,) touch inputs.
+        """
+        p = self.params
+        motor_neuron_step(
+            self.q_ref, self.qd_ref, np.asarray(drive, dtype=np.float64),
+            np.asarray(interrupt, dtype=np.float64), theta, theta_dot,
+            np.asarray(touch, dtype=np.float64), self.posture, p.mu1, p.mu2, self.acc_max,
+            self.vel_max, self.fl_width, p.fl_c, p.fv_K, p.fv_N, self.Z,
+            p.k_rest, p.d_rest, self.q_lo, self.q_hi, self.dt, self.acc,
+        )  # fmt: skip
+        return self.q_ref

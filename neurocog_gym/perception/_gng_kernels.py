@@ -1,0 +1,930 @@
+"""Numba kernels of the DD-GNG family: GNG-U2 base, DD-GNG attention, plain GNG, ML-GNG.
+
+Pure ``@njit(cache=True)`` functions over preallocated NumPy arrays (paper §4.1,
+Algorithms 1–3, Table 2; SPEC §3). The classes in :mod:`neurocog_gym.perception.gng` own the
+arrays and validate inputs; nothing here allocates in the hot path, reads a global that can
+change, or draws from NumPy's global random state. One learning cycle (sampling, λ adaptation
+steps, κ-periodic utility tests, one insertion) runs inside ONE compiled call.
+
+Semantics are pinned down exactly so that the slow oracle
+(:mod:`neurocog_gym.perception.gng_oracle`) reproduces them from the same random stream:
+
+* Random numbers: SplitMix64 on a 64-bit state stored in ``isc[I_RNG]``; an integer in
+  ``[0, n)`` is ``((x >> 32) * n) >> 32``.
+* Sampling (Algorithm 1, lines 5–11): sample ``i`` of a cycle comes from the attention boxes when
+  boxes are given and ``i % period == 0`` (the paper's ``t mod 2``), otherwise from the whole
+  frame. Box points are found without scanning the frame: ``W``-point windows of consecutive
+  rows at random starts are tested against the boxes until the pool holds ``pool_cap`` indices
+  or ``max_windows`` windows were read; box samples are then drawn uniformly, with replacement,
+  from that pool. A pool smaller than ``box_min_points`` counts as empty and those samples fall
+  back to the whole frame. A whole-frame sample is a random row, redrawn up to ``tries`` times
+  until it is finite and within ``coord_limit`` of the origin; a sample that never validates is
+  dropped (only frames that are mostly invalid lose samples).
+* Nearest two (Algorithm 2, lines 3–4): lexicographic minimum of (squared distance, slot index),
+  so ties go to the lower slot. A uniform hashed grid answers it exactly once the net has
+  ``grid_min`` nodes; below that, and when the grid ring search is inconclusive, brute force.
+* Errors and utilities decay per input (Algorithm 2, lines 21–22, applied every input as in
+  GNG-U2). The kernel stores them lazily as ``E = E_scaled * scale_E`` so that the decay of all
+  nodes costs one multiplication; this differs from the oracle only by rounding.
+
+Layout of the packed state (one net; ML-GNG stacks a leading layer axis):
+
+* ``pos``   (M, 3) float64, metres: node positions h_i (free slots hold stale values).
+* ``fnode`` (3, M) float64: rows ``R_E`` scaled error, ``R_U`` scaled utility, ``R_D`` strength δ.
+* ``inode`` (9, M) int64: degree, alive flag, grid next/prev, grid cell x/y/z, alive list,
+  position in the alive list.
+* ``adj``   (2, M, D) int64: neighbour slot and edge age g of each neighbour-list entry.
+* ``ibuf``  (B + P,) int64: grid bucket heads (B, a power of two) then the box-point pool (P).
+* ``fsc``   (NF,) float64 and ``isc`` (NI,) int64: parameters, lazy-decay scales, counters.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# fnode rows
+R_E = 0
+R_U = 1
+R_D = 2
+N_FROWS = 3
+
+# inode rows
+N_DEG = 0
+N_ALIVE = 1
+N_NXT = 2
+N_PRV = 3
+N_CX = 4
+N_CY = 5
+N_CZ = 6
+N_LIST = 7
+N_LPOS = 8
+N_IROWS = 9
+
+# adj planes
+A_NBR = 0
+A_AGE = 1
+
+# fsc entries
+F_ETA1 = 0
+F_ETA2 = 1
+F_ALPHA = 2
+F_BETA = 3
+F_CHI = 4
+F_K = 5
+F_LIMIT = 6
+F_CELLFAC = 7
+F_SPOW = 8
+F_SE = 9
+F_SU = 10
+F_H = 11
+NF = 12
+
+# isc entries
+I_LAM = 0
+I_KAPPA = 1
+I_GMAX = 2
+I_MAXN = 3
+I_MAXDEG = 4
+I_PERIOD = 5
+I_POOLCAP = 6
+I_WIN = 7
+I_MAXWIN = 8
+I_TRIES = 9
+I_GRIDMIN = 10
+I_NBUCKET = 11
+I_POOLMIN = 12
+I_T = 13
+I_NALIVE = 14
+I_RNG = 15
+I_NV = 16
+I_NBOX = 17
+I_NPOOL = 18
+I_NREMOVED = 19
+I_NINSERTED = 20
+I_NBRUTE = 21
+NI = 22
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+# Shrinks pruning gaps by a relative 1e-9 so rounding can never prune a cell holding a tie.
+_SAFE = 1.0 - 1e-9
+_RING_MAX = 2
+
+
+# --------------------------------------------------------------------------------------------
+# random numbers
+# --------------------------------------------------------------------------------------------
+@njit(inline="always")
+def _rand_u64(isc):
+    s = np.uint64(isc[I_RNG]) + _GOLDEN
+    isc[I_RNG] = np.int64(s)
+    z = (s ^ (s >> np.uint64(30))) * _MIX1
+    z = (z ^ (z >> np.uint64(27))) * _MIX2
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(inline="always")
+def _randint(isc, n):
+    return np.int64(((_rand_u64(isc) >> np.uint64(32)) * np.uint64(n)) >> np.uint64(32))
+
+
+# --------------------------------------------------------------------------------------------
+# boxes, validity, strength (Algorithm 3)
+# --------------------------------------------------------------------------------------------
+@njit(inline="always")
+def _strength(x, y, z, boxes, nbox):
+    # Algorithm 3: δ = 1 + number of suspected-obstacle boxes strictly containing the node.
+    d = 1.0
+    for b in range(nbox):
+        if (
+            boxes[b, 0, 0] < x
+            and x < boxes[b, 1, 0]
+            and boxes[b, 0, 1] < y
+            and y < boxes[b, 1, 1]
+            and boxes[b, 0, 2] < z
+            and z < boxes[b, 1, 2]
+        ):
+            d += 1.0
+    return d
+
+
+@njit(inline="always")
+def _valid(x, y, z, lim):
+    # NaN and inf fail ``abs(.) <= lim``, so this one test also drops non-finite rows.
+    return abs(x) <= lim and abs(y) <= lim and abs(z) <= lim
+
+
+@njit(inline="always")
+def _in_any_box(x, y, z, boxes, nbox):
+    for b in range(nbox):
+        if (
+            boxes[b, 0, 0] < x
+            and x < boxes[b, 1, 0]
+            and boxes[b, 0, 1] < y
+            and y < boxes[b, 1, 1]
+            and boxes[b, 0, 2] < z
+            and z < boxes[b, 1, 2]
+        ):
+            return True
+    return False
+
+
+@njit(cache=True)
+def fill_box_pool(points, boxes, nbox, ibuf, fsc, isc):
+    """Collect indices of frame points inside the attention boxes without scanning the frame.
+
+    Reads ``W``-row windows at random starts (cheap sequential reads, and on raster-ordered
+    clouds box points come in runs) until ``pool_cap`` hits or ``max_windows`` windows.
+
+    Args:
+        points: (N, 3) float32/float64, metres, the frame.
+        boxes: (K, 2, 3) float64, metres, min/max corners of the attention boxes.
+        nbox: number of boxes to use (0 disables).
+        ibuf: (B + P,) int64 buffer; the pool is written to ``ibuf[B:B + P]``.
+        fsc: (NF,) float64 scalars (uses the coordinate limit).
+        isc: (NI,) int64 scalars (uses and advances the random state).
+
+    Returns:
+        Number of pool entries written.
+    """
+    n = points.shape[0]
+    if nbox == 0 or n == 0:
+        return 0
+    lim = fsc[F_LIMIT]
+    base = isc[I_NBUCKET]
+    cap = isc[I_POOLCAP]
+    win = isc[I_WIN]
+    npool = 0
+    for _w in range(isc[I_MAXWIN]):
+        j = _randint(isc, n)
+        for _o in range(win):
+            x = points[j, 0]
+            y = points[j, 1]
+            z = points[j, 2]
+            if _valid(x, y, z, lim) and _in_any_box(x, y, z, boxes, nbox):
+                ibuf[base + npool] = j
+                npool += 1
+                if npool == cap:
+                    return npool
+            j += 1
+            if j == n:
+                j = 0
+    return npool
+
+
+@njit(cache=True)
+def draw_samples(points, boxes, nbox, V, ibuf, fsc, isc):
+    """Draw one cycle's input signals V (Algorithm 1, lines 5–11).
+
+    Args:
+        points: (N, 3) float32/float64, metres, the frame.
+        boxes: (K, 2, 3) float64, metres, attention boxes (min/max corners).
+        nbox: number of boxes to use (0 = no attention).
+        V: (λ, 3) float64 output, metres.
+        ibuf: (B + P,) int64 work buffer (box-point pool in the tail).
+        fsc: (NF,) float64 scalars.
+        isc: (NI,) int64 scalars; the random state advances.
+
+    Returns:
+        Number of valid samples written to ``V`` (≤ λ).
+    """
+    n = points.shape[0]
+    lam = isc[I_LAM]
+    if n == 0:
+        return 0
+    lim = fsc[F_LIMIT]
+    period = isc[I_PERIOD]
+    tries = isc[I_TRIES]
+    base = isc[I_NBUCKET]
+    npool = fill_box_pool(points, boxes, nbox, ibuf, fsc, isc)
+    isc[I_NPOOL] = npool
+    if npool < isc[I_POOLMIN]:
+        # (nearly) empty boxes: the whole cycle samples the whole frame
+        npool = 0
+    nv = 0
+    nb = 0
+    for i in range(lam):
+        if npool > 0 and i % period == 0:
+            # Algorithm 1, line 8: a random point of P inside the suspected obstacle
+            j = ibuf[base + _randint(isc, npool)]
+            V[nv, 0] = points[j, 0]
+            V[nv, 1] = points[j, 1]
+            V[nv, 2] = points[j, 2]
+            nv += 1
+            nb += 1
+        else:
+            # Algorithm 1, line 10: a random point of P; invalid rows are redrawn
+            for _tr in range(tries):
+                j = _randint(isc, n)
+                x = points[j, 0]
+                y = points[j, 1]
+                z = points[j, 2]
+                if _valid(x, y, z, lim):
+                    V[nv, 0] = x
+                    V[nv, 1] = y
+                    V[nv, 2] = z
+                    nv += 1
+                    break
+    isc[I_NBOX] = nb
+    return nv
+
+
+# --------------------------------------------------------------------------------------------
+# uniform hashed grid for the nearest-two search
+# --------------------------------------------------------------------------------------------
+@njit(inline="always")
+def _hash(cx, cy, cz, mask):
+    return ((cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)) & mask
+
+
+@njit(inline="always")
+def _grid_link(i, pos, inode, ibuf, inv_h, mask):
+    cx = np.int64(np.floor(pos[i, 0] * inv_h))
+    cy = np.int64(np.floor(pos[i, 1] * inv_h))
+    cz = np.int64(np.floor(pos[i, 2] * inv_h))
+    inode[N_CX, i] = cx
+    inode[N_CY, i] = cy
+    inode[N_CZ, i] = cz
+    b = _hash(cx, cy, cz, mask)
+    h0 = ibuf[b]
+    inode[N_NXT, i] = h0
+    inode[N_PRV, i] = -1
+    if h0 >= 0:
+        inode[N_PRV, h0] = i
+    ibuf[b] = i
+
+
+@njit(inline="always")
+def _grid_unlink(i, inode, ibuf, mask):
+    p = inode[N_PRV, i]
+    q = inode[N_NXT, i]
+    if p >= 0:
+        inode[N_NXT, p] = q
+    else:
+        ibuf[_hash(inode[N_CX, i], inode[N_CY, i], inode[N_CZ, i], mask)] = q
+    if q >= 0:
+        inode[N_PRV, q] = p
+
+
+@njit(inline="always")
+def _grid_moved(i, pos, inode, ibuf, inv_h, mask):
+    cx = np.int64(np.floor(pos[i, 0] * inv_h))
+    cy = np.int64(np.floor(pos[i, 1] * inv_h))
+    cz = np.int64(np.floor(pos[i, 2] * inv_h))
+    if cx != inode[N_CX, i] or cy != inode[N_CY, i] or cz != inode[N_CZ, i]:
+        _grid_unlink(i, inode, ibuf, mask)
+        _grid_link(i, pos, inode, ibuf, inv_h, mask)
+
+
+@njit(cache=True)
+def grid_rebuild(pos, inode, adj, ibuf, fsc, isc):
+    """Choose the cell size from the current edge lengths and rebuild the grid.
+
+    Cell size h = ``cell_factor`` × RMS length of each live node's first edge (≥ 1 µm; 1 m
+    before any edge exists).
+
+    Args:
+        pos: (M, 3) float64, metres, node positions.
+        inode: (9, M) int64 node integers.
+        adj: (2, M, D) int64 neighbour lists and ages.
+        ibuf: (B + P,) int64; bucket heads are rewritten.
+        fsc: (NF,) float64 scalars; ``fsc[F_H]`` receives h.
+        isc: (NI,) int64 scalars.
+    """
+    n = isc[I_NALIVE]
+    acc = 0.0
+    cnt = 0
+    for q in range(n):
+        i = inode[N_LIST, q]
+        if inode[N_DEG, i] > 0:
+            j = adj[A_NBR, i, 0]
+            dx = pos[i, 0] - pos[j, 0]
+            dy = pos[i, 1] - pos[j, 1]
+            dz = pos[i, 2] - pos[j, 2]
+            acc += dx * dx + dy * dy + dz * dz
+            cnt += 1
+    h = 1.0
+    if cnt > 0:
+        h = fsc[F_CELLFAC] * np.sqrt(acc / cnt)
+    if not h >= 1e-6:
+        h = 1e-6
+    fsc[F_H] = h
+    inv_h = 1.0 / h
+    nb = isc[I_NBUCKET]
+    mask = nb - 1
+    for b in range(nb):
+        ibuf[b] = -1
+    for q in range(n):
+        _grid_link(inode[N_LIST, q], pos, inode, ibuf, inv_h, mask)
+
+
+@njit(inline="always")
+def _gap(d, f):
+    # distance, in cells, from a point at fraction f of its cell to the cell d steps away
+    if d == 0:
+        return 0.0
+    if d < 0:
+        return f - d - 1.0
+    return d - f
+
+
+@njit(inline="always")
+def _consider(i, d, b1, d1, b2, d2):
+    # lexicographic (squared distance, slot) top-two
+    if d < d1 or (d == d1 and i < b1):
+        return i, d, b1, d1
+    if d < d2 or (d == d2 and i < b2):
+        return b1, d1, i, d
+    return b1, d1, b2, d2
+
+
+@njit(inline="always")
+def _nearest2_brute(vx, vy, vz, pos, inode, n):
+    b1 = -1
+    b2 = -1
+    d1 = np.inf
+    d2 = np.inf
+    for q in range(n):
+        i = inode[N_LIST, q]
+        dx = vx - pos[i, 0]
+        dy = vy - pos[i, 1]
+        dz = vz - pos[i, 2]
+        d = dx * dx + dy * dy + dz * dz
+        b1, d1, b2, d2 = _consider(i, d, b1, d1, b2, d2)
+    return b1, d1, b2, d2
+
+
+@njit(inline="always")
+def _nearest2_grid(vx, vy, vz, pos, inode, ibuf, h, inv_h, mask):
+    # Exact ring search: ring r visits the cells at Chebyshev distance r, skipping those
+    # farther than the current second best; it stops once nothing outside the explored
+    # cube can beat the second best. Returns b2 = -1 when inconclusive after _RING_MAX.
+    fx = vx * inv_h
+    fy = vy * inv_h
+    fz = vz * inv_h
+    ffx = np.floor(fx)
+    ffy = np.floor(fy)
+    ffz = np.floor(fz)
+    cx = np.int64(ffx)
+    cy = np.int64(ffy)
+    cz = np.int64(ffz)
+    fx -= ffx
+    fy -= ffy
+    fz -= ffz
+    mfrac = min(fx, 1.0 - fx, fy, 1.0 - fy, fz, 1.0 - fz)
+    hh = h * h * _SAFE
+    b1 = -1
+    b2 = -1
+    d1 = np.inf
+    d2 = np.inf
+    for r in range(_RING_MAX + 1):
+        for dx in range(-r, r + 1):
+            gx = _gap(dx, fx)
+            gx2 = gx * gx * hh
+            if gx2 > d2:
+                continue
+            adx = abs(dx)
+            for dy in range(-r, r + 1):
+                gy = _gap(dy, fy)
+                gxy2 = gx2 + gy * gy * hh
+                if gxy2 > d2:
+                    continue
+                step = 1
+                if adx != r and abs(dy) != r:
+                    step = 2 * r
+                for dz in range(-r, r + 1, step):
+                    gz = _gap(dz, fz)
+                    if gxy2 + gz * gz * hh > d2:
+                        continue
+                    ccx = cx + dx
+                    ccy = cy + dy
+                    ccz = cz + dz
+                    i = ibuf[_hash(ccx, ccy, ccz, mask)]
+                    while i >= 0:
+                        if inode[N_CX, i] == ccx and inode[N_CY, i] == ccy and inode[N_CZ, i] == ccz:
+                            ex = vx - pos[i, 0]
+                            ey = vy - pos[i, 1]
+                            ez = vz - pos[i, 2]
+                            d = ex * ex + ey * ey + ez * ez
+                            b1, d1, b2, d2 = _consider(i, d, b1, d1, b2, d2)
+                        i = inode[N_NXT, i]
+        m = mfrac + r
+        if b2 >= 0 and d2 < m * m * hh:
+            return b1, d1, b2, d2
+    return b1, d1, -1, d2
+
+
+# --------------------------------------------------------------------------------------------
+# graph bookkeeping: neighbour lists with ages, alive list, slots
+# --------------------------------------------------------------------------------------------
+@njit(inline="always")
+def _find(adj, i, j, deg):
+    for k in range(deg):
+        if adj[A_NBR, i, k] == j:
+            return k
+    return -1
+
+
+@njit(inline="always")
+def _drop_entry(adj, inode, i, k):
+    # swap-remove entry k of i's neighbour list
+    last = inode[N_DEG, i] - 1
+    adj[A_NBR, i, k] = adj[A_NBR, i, last]
+    adj[A_AGE, i, k] = adj[A_AGE, i, last]
+    inode[N_DEG, i] = last
+
+
+@njit(inline="always")
+def _remove_edge(adj, inode, i, j):
+    k = _find(adj, i, j, inode[N_DEG, i])
+    if k >= 0:
+        _drop_entry(adj, inode, i, k)
+    k = _find(adj, j, i, inode[N_DEG, j])
+    if k >= 0:
+        _drop_entry(adj, inode, j, k)
+
+
+@njit(inline="always")
+def _append_edge(adj, inode, i, j):
+    d = inode[N_DEG, i]
+    adj[A_NBR, i, d] = j
+    adj[A_AGE, i, d] = 0
+    inode[N_DEG, i] = d + 1
+
+
+@njit(cache=True)
+def _kill_node(i, inode, adj, ibuf, isc):
+    # Remove node i and all its edges (neighbours may be left isolated: caller handles them).
+    while inode[N_DEG, i] > 0:
+        j = adj[A_NBR, i, inode[N_DEG, i] - 1]
+        _remove_edge(adj, inode, i, j)
+    inode[N_ALIVE, i] = 0
+    n = isc[I_NALIVE] - 1
+    p = inode[N_LPOS, i]
+    last = inode[N_LIST, n]
+    inode[N_LIST, p] = last
+    inode[N_LPOS, last] = p
+    isc[I_NALIVE] = n
+    _grid_unlink(i, inode, ibuf, isc[I_NBUCKET] - 1)
+    isc[I_NREMOVED] += 1
+
+
+@njit(cache=True)
+def _new_node(x, y, z, e, u, boxes, nbox, pos, fnode, inode, ibuf, fsc, isc):
+    # Lowest free slot (deterministic, mirrored by the oracle). Returns -1 when full.
+    m = inode.shape[1]
+    r = -1
+    for i in range(min(m, isc[I_MAXN])):
+        if inode[N_ALIVE, i] == 0:
+            r = i
+            break
+    if r < 0:
+        return -1
+    pos[r, 0] = x
+    pos[r, 1] = y
+    pos[r, 2] = z
+    fnode[R_E, r] = e
+    fnode[R_U, r] = u
+    fnode[R_D, r] = _strength(x, y, z, boxes, nbox)
+    inode[N_DEG, r] = 0
+    inode[N_ALIVE, r] = 1
+    n = isc[I_NALIVE]
+    inode[N_LIST, n] = r
+    inode[N_LPOS, r] = n
+    isc[I_NALIVE] = n + 1
+    _grid_link(r, pos, inode, ibuf, 1.0 / fsc[F_H], isc[I_NBUCKET] - 1)
+    return r
+
+
+@njit(cache=True)
+def _connect(s1, s2, adj, inode, ibuf, isc):
+    # Algorithm 2, lines 5–7: create edge s1–s2 or reset its age. A full neighbour list
+    # (max degree D, a bound the paper's dense matrix does not have) first drops its oldest
+    # edge (ties: lower neighbour slot); a node left isolated by that is removed.
+    k = _find(adj, s1, s2, inode[N_DEG, s1])
+    if k >= 0:
+        adj[A_AGE, s1, k] = 0
+        k2 = _find(adj, s2, s1, inode[N_DEG, s2])
+        adj[A_AGE, s2, k2] = 0
+        return
+    dmax = adj.shape[2]
+    for a in (s1, s2):
+        if inode[N_DEG, a] >= dmax:
+            bk = 0
+            for kk in range(1, dmax):
+                ak = adj[A_AGE, a, kk]
+                ab = adj[A_AGE, a, bk]
+                if ak > ab or (ak == ab and adj[A_NBR, a, kk] < adj[A_NBR, a, bk]):
+                    bk = kk
+            j = adj[A_NBR, a, bk]
+            _remove_edge(adj, inode, a, j)
+            if inode[N_DEG, j] == 0:
+                _kill_node(j, inode, adj, ibuf, isc)
+    _append_edge(adj, inode, s1, s2)
+    _append_edge(adj, inode, s2, s1)
+
+
+@njit(cache=True)
+def refresh_strength(boxes, nbox, fnode, pos, inode, isc):
+    """Recompute δ of every live node for the current boxes (Algorithm 3).
+
+    Args:
+        boxes: (K, 2, 3) float64, metres, attention boxes.
+        nbox: number of boxes to use.
+        fnode: (3, M) float64; row ``R_D`` is rewritten.
+        pos: (M, 3) float64, metres.
+        inode: (9, M) int64.
+        isc: (NI,) int64.
+    """
+    for q in range(isc[I_NALIVE]):
+        i = inode[N_LIST, q]
+        fnode[R_D, i] = _strength(pos[i, 0], pos[i, 1], pos[i, 2], boxes, nbox)
+
+
+# --------------------------------------------------------------------------------------------
+# the learning cycle (Algorithm 2)
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def learn(V, nv, boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
+    """Adapt the net to the ``nv`` input signals in ``V`` (Algorithm 2, lines 1–22).
+
+    Args:
+        V: (λ, 3) float64, metres, input signals of this cycle.
+        nv: number of valid rows in ``V``.
+        boxes: (K, 2, 3) float64, metres, attention boxes.
+        nbox: number of boxes (0: every δ is 1, plain GNG-U2).
+        pos: (M, 3) float64, metres, node positions.
+        fnode: (3, M) float64 scaled error, scaled utility, strength δ.
+        inode: (9, M) int64 node integers.
+        adj: (2, M, D) int64 neighbour slots and edge ages.
+        ibuf: (B + P,) int64 grid buckets and pool.
+        fsc: (NF,) float64 scalars.
+        isc: (NI,) int64 scalars.
+    """
+    eta1 = fsc[F_ETA1]
+    eta2 = fsc[F_ETA2]
+    kk_ = fsc[F_K]
+    dec_e = 1.0 - fsc[F_BETA]
+    dec_u = 1.0 - fsc[F_CHI]
+    se = fsc[F_SE]
+    su = fsc[F_SU]
+    h = fsc[F_H]
+    inv_h = 1.0 / h
+    mask = isc[I_NBUCKET] - 1
+    gmax = isc[I_GMAX]
+    kappa = isc[I_KAPPA]
+    gmin = isc[I_GRIDMIN]
+    t = isc[I_T]
+    ee = fnode[R_E]
+    uu = fnode[R_U]
+    dl = fnode[R_D]
+    nbr = adj[A_NBR]
+    age = adj[A_AGE]
+    deg = inode[N_DEG]
+    alist = inode[N_LIST]
+    for si in range(nv):
+        vx = V[si, 0]
+        vy = V[si, 1]
+        vz = V[si, 2]
+        t += 1
+        n = isc[I_NALIVE]
+        # Algorithm 2, lines 3–4: winner s1 and second s2 (squared distances d1 <= d2)
+        s1 = -1
+        s2 = -1
+        d1 = 0.0
+        d2 = 0.0
+        if n >= gmin:
+            s1, d1, s2, d2 = _nearest2_grid(vx, vy, vz, pos, inode, ibuf, h, inv_h, mask)
+        if s2 < 0:
+            s1, d1, s2, d2 = _nearest2_brute(vx, vy, vz, pos, inode, n)
+            isc[I_NBRUTE] += 1
+        # lines 5–7
+        _connect(s1, s2, adj, inode, ibuf, isc)
+        # lines 8–9 (squared distances, SPEC §3 / Fritzke; the paper prints the norm)
+        ee[s1] += d1 / se
+        uu[s1] += (d2 - d1) / su
+        # line 10
+        pos[s1, 0] += eta1 * (vx - pos[s1, 0])
+        pos[s1, 1] += eta1 * (vy - pos[s1, 1])
+        pos[s1, 2] += eta1 * (vz - pos[s1, 2])
+        _grid_moved(s1, pos, inode, ibuf, inv_h, mask)
+        if nbox > 0:
+            dl[s1] = _strength(pos[s1, 0], pos[s1, 1], pos[s1, 2], boxes, nbox)
+        # lines 11–15: neighbours move by η2, edges age, an edge older than g_max goes
+        # (the paper prints "<"; read ">"), and a neighbour left without edges goes too.
+        for k in range(deg[s1] - 1, -1, -1):
+            j = nbr[s1, k]
+            pos[j, 0] += eta2 * (vx - pos[j, 0])
+            pos[j, 1] += eta2 * (vy - pos[j, 1])
+            pos[j, 2] += eta2 * (vz - pos[j, 2])
+            _grid_moved(j, pos, inode, ibuf, inv_h, mask)
+            if nbox > 0:
+                dl[j] = _strength(pos[j, 0], pos[j, 1], pos[j, 2], boxes, nbox)
+            a = age[s1, k] + 1
+            age[s1, k] = a
+            kj = _find(adj, j, s1, deg[j])
+            if a > gmax:
+                _drop_entry(adj, inode, s1, k)
+                _drop_entry(adj, inode, j, kj)
+                if deg[j] == 0:
+                    _kill_node(j, inode, adj, ibuf, isc)
+            else:
+                age[j, kj] = a
+        # lines 16–20: every κ inputs the utility test. u = max-error node, l = min-utility
+        # node; remove l when E_u / U_l > k·δ_l. The paper prints δ_u; SPEC §3 reads the
+        # intent as protecting the removal candidate, so δ_l. Written multiplied out so a
+        # zero utility needs no division. Never shrinks the net below two nodes.
+        n = isc[I_NALIVE]
+        if t % kappa == 0 and n > 2:
+            emax = -np.inf
+            lu = np.inf
+            li = -1
+            for q in range(n):
+                i = alist[q]
+                e = ee[i]
+                if e > emax:
+                    emax = e
+                u = uu[i]
+                if u < lu or (u == lu and i < li):
+                    lu = u
+                    li = i
+            if emax * se > kk_ * dl[li] * lu * su:
+                c = 0
+                for k in range(deg[li]):
+                    if deg[nbr[li, k]] == 1:
+                        c += 1
+                if n - 1 - c >= 2:
+                    _kill_node(li, inode, adj, ibuf, isc)
+                    # its former neighbours now without edges go as well (recheck list)
+                    q = 0
+                    while q < isc[I_NALIVE]:
+                        i = alist[q]
+                        if deg[i] == 0:
+                            _kill_node(i, inode, adj, ibuf, isc)
+                        else:
+                            q += 1
+        # lines 21–22: decay of every error and utility, done lazily through the scales
+        se *= dec_e
+        su *= dec_u
+    isc[I_T] = t
+    fsc[F_SE] = se
+    fsc[F_SU] = su
+
+
+@njit(inline="always")
+def _weight(e, d, p):
+    # insertion priority E·δ^p; the common p = 1 skips pow()
+    if p == 1.0:
+        return e * d
+    return e * d**p
+
+
+@njit(cache=True)
+def insert_node(boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
+    """Insert one node between the max-error node and its max-error neighbour.
+
+    Algorithm 2, lines 23–30, with the DD-GNG strength weighting: u = argmax E·δ^p and
+    f = argmax over u's neighbours of E·δ^p (p = ``strength_power``), so strong (attended)
+    nodes win insertions. E_u, E_f decay by α; E_r = (E_u + E_f)/2 (paper, line 28);
+    U_r = (U_u + U_f)/2 (Fritzke's GNG-U; the paper leaves U_r open); δ_r by Algorithm 3.
+
+    Args:
+        boxes: (K, 2, 3) float64, metres, attention boxes.
+        nbox: number of boxes.
+        pos: (M, 3) float64, metres.
+        fnode: (3, M) float64.
+        inode: (9, M) int64.
+        adj: (2, M, D) int64.
+        ibuf: (B + P,) int64.
+        fsc: (NF,) float64.
+        isc: (NI,) int64.
+
+    Returns:
+        Slot of the new node, or -1 if none was inserted (net full or degenerate).
+    """
+    n = isc[I_NALIVE]
+    if n < 2 or n >= isc[I_MAXN]:
+        return -1
+    ee = fnode[R_E]
+    uu = fnode[R_U]
+    dl = fnode[R_D]
+    p = fsc[F_SPOW]
+    bu = -1
+    best = -np.inf
+    for q in range(n):
+        i = inode[N_LIST, q]
+        w = _weight(ee[i], dl[i], p)
+        if w > best or (w == best and i < bu):
+            best = w
+            bu = i
+    if inode[N_DEG, bu] == 0:
+        return -1
+    bf = -1
+    best = -np.inf
+    for k in range(inode[N_DEG, bu]):
+        i = adj[A_NBR, bu, k]
+        w = _weight(ee[i], dl[i], p)
+        if w > best or (w == best and i < bf):
+            best = w
+            bf = i
+    x = 0.5 * (pos[bu, 0] + pos[bf, 0])
+    y = 0.5 * (pos[bu, 1] + pos[bf, 1])
+    z = 0.5 * (pos[bu, 2] + pos[bf, 2])
+    a = 1.0 - fsc[F_ALPHA]
+    ee[bu] *= a
+    ee[bf] *= a
+    r = _new_node(
+        x, y, z, 0.5 * (ee[bu] + ee[bf]), 0.5 * (uu[bu] + uu[bf]), boxes, nbox, pos, fnode,
+        inode, ibuf, fsc, isc,
+    )
+    _remove_edge(adj, inode, bu, bf)
+    _append_edge(adj, inode, bu, r)
+    _append_edge(adj, inode, r, bu)
+    _append_edge(adj, inode, bf, r)
+    _append_edge(adj, inode, r, bf)
+    isc[I_NINSERTED] += 1
+    return r
+
+
+@njit(cache=True)
+def _renormalise(fnode, inode, fsc, isc):
+    # fold the lazy decay scales back into the stored values before they underflow
+    se = fsc[F_SE]
+    su = fsc[F_SU]
+    if se < 1e-100 or su < 1e-100:
+        for q in range(isc[I_NALIVE]):
+            i = inode[N_LIST, q]
+            fnode[R_E, i] *= se
+            fnode[R_U, i] *= su
+        fsc[F_SE] = 1.0
+        fsc[F_SU] = 1.0
+
+
+@njit(cache=True)
+def cycle(points, boxes, nbox, pos, V, fnode, inode, adj, ibuf, fsc, isc):
+    """Run one full learning cycle of one net on one frame (Algorithms 1–3).
+
+    Args:
+        points: (N, 3) float32/float64, metres, the frame.
+        boxes: (K, 2, 3) float64, metres, attention boxes (min/max corners).
+        nbox: number of boxes used (0 = plain GNG-U2).
+        pos: (M, 3) float64, metres, node positions.
+        V: (λ, 3) float64 work buffer for the input signals.
+        fnode: (3, M) float64 scaled error, scaled utility, strength.
+        inode: (9, M) int64 node integers.
+        adj: (2, M, D) int64 neighbour lists and ages.
+        ibuf: (B + P,) int64 grid buckets and box pool.
+        fsc: (NF,) float64 scalars.
+        isc: (NI,) int64 scalars.
+
+    Returns:
+        Number of input signals learned.
+    """
+    _renormalise(fnode, inode, fsc, isc)
+    refresh_strength(boxes, nbox, fnode, pos, inode, isc)
+    nv = draw_samples(points, boxes, nbox, V, ibuf, fsc, isc)
+    isc[I_NV] = nv
+    if nv == 0:
+        return 0
+    if isc[I_NALIVE] == 0:
+        # Algorithm 1, line 1: two initial nodes, here at two random frame points
+        j = min(1, nv - 1)
+        fsc[F_H] = 1.0
+        grid_rebuild(pos, inode, adj, ibuf, fsc, isc)
+        _new_node(V[0, 0], V[0, 1], V[0, 2], 0.0, 0.0, boxes, nbox, pos, fnode, inode, ibuf, fsc, isc)
+        _new_node(V[j, 0], V[j, 1], V[j, 2], 0.0, 0.0, boxes, nbox, pos, fnode, inode, ibuf, fsc, isc)
+    grid_rebuild(pos, inode, adj, ibuf, fsc, isc)
+    learn(V, nv, boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc)
+    insert_node(boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc)
+    return nv
+
+
+@njit(cache=True)
+def cycle_layers(points, boxes, nbox, pos, V, fnode, inode, adj, ibuf, fsc, isc):
+    """Run one learning cycle of every layer of a stacked multi-layer net (ML-GNG).
+
+    Each layer draws its own λ signals from the same frame with its own random stream.
+
+    Args:
+        points: (N, 3) float32/float64, metres, the frame.
+        boxes: (K, 2, 3) float64, metres, attention boxes (used only if ``nbox`` > 0).
+        nbox: number of boxes used.
+        pos: (L, M, 3) float64 stacked node positions.
+        V: (λ, 3) float64 shared work buffer.
+        fnode: (L, 3, M) float64.
+        inode: (L, 9, M) int64.
+        adj: (L, 2, M, D) int64.
+        ibuf: (L, B + P) int64.
+        fsc: (L, NF) float64.
+        isc: (L, NI) int64.
+
+    Returns:
+        Total number of input signals learned over the layers.
+    """
+    tot = 0
+    for lay in range(pos.shape[0]):
+        tot += cycle(
+            points, boxes, nbox, pos[lay], V, fnode[lay], inode[lay], adj[lay], ibuf[lay],
+            fsc[lay], isc[lay],
+        )
+    return tot
+
+
+@njit(cache=True)
+def export_graph(pos, fnode, inode, adj, out_nodes, out_edges, out_strength):
+    """Compact the live nodes (ascending slot order) and list each edge once.
+
+    Edges come out as (i, j) with i < j in compacted indices, sorted lexicographically.
+    Rows beyond the output capacity are dropped (nodes first-come by slot, and edges that
+    touch a dropped node); the returned counts are those written.
+
+    Args:
+        pos: (M, 3) float64, metres.
+        fnode: (3, M) float64.
+        inode: (9, M) int64.
+        adj: (2, M, D) int64.
+        out_nodes: (Nmax, 3) float64 output, metres.
+        out_edges: (Emax, 2) int64 output.
+        out_strength: (Nmax,) float64 output, δ.
+
+    Returns:
+        (number of nodes written, number of edges written).
+    """
+    m = inode.shape[1]
+    cap_n = out_nodes.shape[0]
+    cap_e = out_edges.shape[0]
+    remap = np.full(m, -1, dtype=np.int64)
+    n = 0
+    for i in range(m):
+        if inode[N_ALIVE, i] != 0 and n < cap_n:
+            remap[i] = n
+            out_nodes[n, 0] = pos[i, 0]
+            out_nodes[n, 1] = pos[i, 1]
+            out_nodes[n, 2] = pos[i, 2]
+            out_strength[n] = fnode[R_D, i]
+            n += 1
+    buf = np.empty(adj.shape[2], dtype=np.int64)
+    ne = 0
+    for i in range(m):
+        ri = remap[i]
+        if ri < 0:
+            continue
+        c = 0
+        for k in range(inode[N_DEG, i]):
+            j = adj[A_NBR, i, k]
+            if j > i and remap[j] >= 0:
+                # insertion sort of at most D entries
+                p = c
+                while p > 0 and buf[p - 1] > j:
+                    buf[p] = buf[p - 1]
+                    p -= 1
+                buf[p] = j
+                c += 1
+        for k in range(c):
+            if ne < cap_e:
+                out_edges[ne, 0] = ri
+                out_edges[ne, 1] = remap[buf[k]]
+                ne += 1
+    return n, ne

@@ -1,0 +1,93 @@
+"""Loading the robot and scene, and the name-to-index map every stage uses.
+
+Sensors, joints, sites and geoms are looked up by name (``names.py``), never by a magic index.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import mujoco
+import numpy as np
+
+from neurocog_gym import paths
+from neurocog_gym.robot import names
+
+
+@lru_cache(maxsize=4)
+def _model_xml_path(scene: str) -> str:
+    return str(paths.asset(scene))
+
+
+def load_model(scene: str = paths.SCENE_XML) -> mujoco.MjModel:
+    """Compile the scene (which includes the robot) into a fresh ``MjModel``."""
+    return mujoco.MjModel.from_xml_path(_model_xml_path(scene))
+
+
+@dataclass(frozen=True)
+class RobotIndex:
+    """Addresses of the robot's parts in one compiled model (all arrays int, names.py order)."""
+
+    torso_body: int
+    qpos_adr: np.ndarray
+    """(12,) qpos address of each actuated joint."""
+    dof_adr: np.ndarray
+    """(12,) qvel address of each actuated joint."""
+    actuator: np.ndarray
+    """(12,) actuator id of each joint's servo."""
+    touch_adr: np.ndarray
+    """(4,) sensordata address of each sole's touch sensor."""
+    foot_site: np.ndarray
+    """(4,) site id of each foot."""
+    foot_geom: np.ndarray
+    """(4,) geom id of each foot."""
+    hip_body: np.ndarray
+    """(4,) body id of each leg's first body (its hip)."""
+    tof_site: np.ndarray
+    """(4,) site id of each time-of-flight sensor."""
+    robot_geoms: np.ndarray
+    """ids of every geom that belongs to the robot."""
+    joint_lo: np.ndarray
+    """(12,) lower joint limit, rad."""
+    joint_hi: np.ndarray
+    """(12,) upper joint limit, rad."""
+    home_qpos: np.ndarray
+    """(nq,) the ``home`` keyframe."""
+    home_ctrl: np.ndarray
+    """(12,) servo targets of the ``home`` keyframe, rad."""
+    mass: float
+    """Total robot mass, kg."""
+
+    @classmethod
+    def build(cls, model: mujoco.MjModel) -> RobotIndex:
+        """Look every part up by name; a missing name raises ``KeyError`` naming it."""
+
+        def one(kind, name):
+            try:
+                return getattr(model, kind)(name).id
+            except KeyError:
+                raise KeyError(f"the model has no {kind} named {name!r}") from None
+
+        joints = np.array([one("joint", n) for n in names.JOINTS])
+        torso = one("body", names.TORSO)
+        touch = np.array([model.sensor_adr[one("sensor", n)] for n in names.TOUCH_SENSORS])
+        robot_geoms = np.flatnonzero(model.geom_group == names.ROBOT_GEOM_GROUP)
+        key = one("key", "home")
+        return cls(
+            torso_body=torso,
+            qpos_adr=model.jnt_qposadr[joints].copy(),
+            dof_adr=model.jnt_dofadr[joints].copy(),
+            actuator=np.array([one("actuator", n) for n in names.ACTUATORS]),
+            touch_adr=touch,
+            foot_site=np.array([one("site", n) for n in names.FOOT_SITES]),
+            foot_geom=np.array([one("geom", n) for n in names.FOOT_GEOMS]),
+            hip_body=np.array([one("body", n) for n in names.HIP_BODIES]),
+            tof_site=np.array([one("site", n) for n in names.TOF_SITES]),
+            robot_geoms=robot_geoms,
+            joint_lo=model.jnt_range[joints, 0].copy(),
+            joint_hi=model.jnt_range[joints, 1].copy(),
+            home_qpos=model.key_qpos[key].copy(),
+            home_ctrl=model.key_ctrl[key].copy(),
+            mass=float(model.body_subtreemass[torso]),
+        )
