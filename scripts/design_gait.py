@@ -46,6 +46,13 @@ class TrotDesign:
     w: float = 0.2  # neighbour inhibition (C29, C34, C53, C58)
     wb: float = 0.2  # diagonal flexor->extensor inhibition (C42, C45)
     c1: float = 2.0  # hip half-centre mutual inhibition (C1)
+    kfh: float | None = None  # hind knee flexor synapse (None: as the front)
+    phh: float | None = None  # hind hip posture, rad (None: as the front)
+    pkh: float | None = None  # hind knee posture, rad (None: as the front)
+
+
+def _or(value: float | None, default: float) -> float:
+    return default if value is None else value
 
 
 def build(p: TrotDesign) -> Gait:
@@ -57,9 +64,9 @@ def build(p: TrotDesign) -> Gait:
         genes[k] = v
     return Gait(
         genes=tuple(float(v) for v in genes),
-        flexor_gain=tuple([0.0, p.hg, p.kf] * 4),
+        flexor_gain=tuple([0.0, p.hg, p.kf] * 2 + [0.0, p.hg, _or(p.kfh, p.kf)] * 2),
         extensor_gain=tuple([0.0, p.hg, p.ke] * 4),
-        posture=tuple([0.0, p.ph, p.pk] * 4),
+        posture=tuple([0.0, p.ph, p.pk] * 2 + [0.0, _or(p.phh, p.ph), _or(p.pkh, p.pk)] * 2),
         tau_f=p.tf,
         acc_max=p.am,
         k_rest=p.kr,

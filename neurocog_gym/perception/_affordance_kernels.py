@@ -1,14 +1,20 @@
 """Numba kernels for affordance detection (§4.2, Eq. 1–4) and surface matching (§6.5.3, Eq. 12–15).
 
-Pure ``@njit(cache=True)`` functions over NumPy arrays: no Python objects, no state. The public
-wrappers, with validation and the documentation of every choice, are
-:mod:`neurocog_gym.perception.affordance` and :mod:`neurocog_gym.perception.similarity`.
+Pure ``@njit(cache=True)`` functions over NumPy arrays: no Python objects, no state (the integer
+constants below are compile-time constants). The public wrappers, with validation and the
+documentation of every choice, are :mod:`neurocog_gym.perception.affordance` and
+:mod:`neurocog_gym.perception.similarity`.
 
 Adjacency is CSR with slack, built in two passes over the edge array (count, fill): row ``i`` of
 the flat array ``adj`` starts at ``start[i]``, holds ``deg[i]`` neighbours and has room for
-``cap[i]`` (its input degree plus ``DIAGONAL_SLACK``), so the 4-cycle diagonals are appended in
-place. The undirected edge ``(lo, hi)``, ``lo < hi``, is identified by its slot ``start[lo] + k``
-where ``adj[start[lo] + k] == hi``; the slots index the edge-to-facet table.
+``cap[i]`` (its input degree plus ``SLACK``), so the quad diagonals are appended in place.
+``twin[s]`` is the slot of the reverse direction of slot ``s``. Rows are laid out in node order,
+so the id of an undirected edge, ``min(s, twin[s])``, is its slot in the lower node's row; edge
+ids index the edge-to-facet table ``ecnt``/``eface``.
+
+Facets are stored as ``fi`` (cap, 6) int64 ``(v0, v1, v2, e0, e1, e2)`` (vertices wound so the
+right-hand normal is the oriented one, and the ids of the three edges) and ``ff`` (cap, 7)
+float64 ``(nx, ny, nz, cx, cy, cz, area)``.
 """
 
 from __future__ import annotations
@@ -19,8 +25,43 @@ from numba import njit
 KIND_TERRAIN = 0
 KIND_WALL = 1
 KIND_OBJECT = 2
-DIAGONAL_SLACK = 8
-MAX_FACETS_PER_EDGE = 4
+SLACK = 6
+"""Free adjacency slots per row for quad diagonals."""
+MAX_PER_EDGE = 4
+"""Facets remembered per edge (a manifold surface has at most two)."""
+
+# Packed parameter vector (``AffordanceParams.packed``).
+P_MAX_FACETS = 0
+P_MIN_QUALITY = 1
+P_COS_GROW = 2
+P_COS_REGION = 3
+P_TERRAIN_TILT = 4
+P_WALL_TILT = 5
+P_WALL_HEIGHT = 6
+P_GROUND_TOL = 7
+P_GROUND_SHARE = 8
+P_DENSITY = 9
+P_PADDING = 10
+N_PARAMS = 11
+
+# Label table columns (one row per label).
+L_KIND = 0
+L_HEIGHT = 1
+L_WIDTH = 2
+L_LENGTH = 3
+L_GAMMA = 4
+L_DENSITY = 5
+L_SIZE = 6
+L_NNODES = 7
+L_SUSPECTED = 8
+L_POS = 9
+L_NORMAL = 12
+L_BOX = 15
+N_LABEL_COLS = 21
+
+# Mode bits of ``detect_kernel``.
+MODE_ORIENT_AWAY = 1
+MODE_GROUND_KNOWN = 2
 
 
 @njit(cache=True)
@@ -47,7 +88,7 @@ def _row_find(adj, start, deg, a, b):
 
 @njit(cache=True)
 def build_adjacency(valid, edges, slack):
-    """CSR-with-slack adjacency from an undirected edge list.
+    """CSR-with-slack adjacency from an undirected edge list, two passes over ``edges``.
 
     Args:
         valid: (n,) bool, nodes that may carry edges (finite coordinates).
@@ -56,8 +97,9 @@ def build_adjacency(valid, edges, slack):
         slack: free slots per non-isolated row, for the diagonals.
 
     Returns:
-        ``(adj, start, cap, deg, n_bad)``: flat neighbour array, (n + 1,) row starts, (n,) row
-        capacities, (n,) degrees, and the number of edges with an index outside [0, n).
+        ``(adj, twin, start, cap, deg, n_bad)``: flat neighbour and reverse-slot arrays, (n + 1,)
+        row starts, (n,) row capacities, (n,) degrees, and the number of edges with an index
+        outside [0, n).
     """
     n = valid.shape[0]
     m = edges.shape[0]
@@ -81,6 +123,7 @@ def build_adjacency(valid, edges, slack):
         total += cap[i]
     start[n] = total
     adj = np.empty(max(total, 1), np.int64)
+    twin = np.empty(max(total, 1), np.int64)
     deg[:] = 0
     for e in range(m):
         a = edges[e, 0]
@@ -89,11 +132,15 @@ def build_adjacency(valid, edges, slack):
             continue
         if _row_find(adj, start, deg, a, b) >= 0:
             continue
-        adj[start[a] + deg[a]] = b
+        pa = start[a] + deg[a]
+        pb = start[b] + deg[b]
+        adj[pa] = b
+        adj[pb] = a
+        twin[pa] = pb
+        twin[pb] = pa
         deg[a] += 1
-        adj[start[b] + deg[b]] = a
         deg[b] += 1
-    return adj, start, cap, deg, n_bad
+    return adj, twin, start, cap, deg, n_bad
 
 
 @njit(cache=True)
@@ -105,117 +152,126 @@ def _sqdist(nodes, a, b):
 
 
 @njit(cache=True)
-def _link(adj, start, cap, deg, a, b):
-    """Append the edge a-b if both rows have room; return whether it was added."""
-    if deg[a] >= cap[a] or deg[b] >= cap[b]:
-        return False
-    adj[start[a] + deg[a]] = b
-    deg[a] += 1
-    adj[start[b] + deg[b]] = a
-    deg[b] += 1
-    return True
+def _grow(fi, ff):
+    """Double the facet capacity."""
+    cap = 2 * fi.shape[0]
+    fi2 = np.empty((cap, 6), np.int64)
+    ff2 = np.empty((cap, 7), np.float64)
+    fi2[: fi.shape[0]] = fi
+    ff2[: ff.shape[0]] = ff
+    return fi2, ff2
 
 
 @njit(cache=True)
-def add_diagonals(nodes, adj, start, cap, deg):
-    """Close every chordless 4-cycle with its shorter diagonal, in place (SPEC §4).
-
-    For each node ``a`` the wedges ``a-b-c`` (``c > a``, ``c`` not adjacent to ``a``) are
-    collected per ``c``; two wedges ``a-b-c`` and ``a-d-c`` with ``b``, ``d`` not adjacent form a
-    chordless 4-cycle, closed by ``a-c`` or ``b-d``, whichever is shorter (``a-c`` on a tie). The
-    pass is greedy: a cycle that already got a chord from an earlier addition is left alone, so
-    no quad gets both (crossing) diagonals. A row without free slots skips the diagonal.
-
-    Returns:
-        Number of diagonals added.
-    """
-    n = nodes.shape[0]
-    mark = np.full(n, -1, np.int64)
-    nmid = np.zeros(n, np.int64)
-    mids = np.empty((n, 4), np.int64)
-    touched = np.empty(n, np.int64)
-    added = 0
-    for a in range(n):
-        if deg[a] < 2:
-            continue
-        mark[a] = a
-        sa = start[a]
-        for k in range(deg[a]):
-            mark[adj[sa + k]] = a
-        nt = 0
-        ka = 0
-        while ka < deg[a]:
-            b = adj[sa + ka]
-            ka += 1
-            sb = start[b]
-            nb = deg[b]
-            for kb in range(nb):
-                c = adj[sb + kb]
-                if c <= a or mark[c] == a:
-                    continue
-                cnt = nmid[c]
-                if cnt == 0:
-                    touched[nt] = c
-                    nt += 1
-                closed = False
-                for q in range(min(cnt, 4)):
-                    d = mids[c, q]
-                    if d == b or _row_find(adj, start, deg, b, d) >= 0:
-                        continue
-                    # Chordless 4-cycle a-b-c-d: add the shorter diagonal.
-                    if _sqdist(nodes, a, c) <= _sqdist(nodes, b, d):
-                        if _link(adj, start, cap, deg, a, c):
-                            mark[c] = a
-                            added += 1
-                            closed = True
-                            break
-                    elif _link(adj, start, cap, deg, b, d):
-                        added += 1
-                if closed:
-                    continue
-                if cnt < 4:
-                    mids[c, cnt] = b
-                nmid[c] = cnt + 1
-        for t in range(nt):
-            nmid[touched[t]] = 0
-    return added
+def _add_facet(nodes, u, v, w, e0, e1, e2, origin, away, min_quality, fi, ff, nf, ecnt, eface):
+    """Append facet (u, v, w) with Eq. (1) normal unless it is a sliver; return the new count."""
+    # Eq. (1): N = (n0 - n1) x (n0 - n2) / |(n0 - n1) x (n0 - n2)|.
+    e1x = nodes[u, 0] - nodes[v, 0]
+    e1y = nodes[u, 1] - nodes[v, 1]
+    e1z = nodes[u, 2] - nodes[v, 2]
+    e2x = nodes[u, 0] - nodes[w, 0]
+    e2y = nodes[u, 1] - nodes[w, 1]
+    e2z = nodes[u, 2] - nodes[w, 2]
+    cx = e1y * e2z - e1z * e2y
+    cy = e1z * e2x - e1x * e2z
+    cz = e1x * e2y - e1y * e2x
+    c2 = np.sqrt(cx * cx + cy * cy + cz * cz)
+    longest = max(
+        e1x * e1x + e1y * e1y + e1z * e1z,
+        max(e2x * e2x + e2y * e2y + e2z * e2z, _sqdist(nodes, v, w)),
+    )
+    # Slivers (collinear or duplicate nodes): 2 * area / longest_edge**2 below min_quality.
+    if not (c2 > 1e-14) or c2 < min_quality * longest:
+        return nf
+    nx = cx / c2
+    ny = cy / c2
+    nz = cz / c2
+    mx = (nodes[u, 0] + nodes[v, 0] + nodes[w, 0]) / 3.0
+    my = (nodes[u, 1] + nodes[v, 1] + nodes[w, 1]) / 3.0
+    mz = (nodes[u, 2] + nodes[v, 2] + nodes[w, 2]) / 3.0
+    side = nx * (origin[0] - mx) + ny * (origin[1] - my) + nz * (origin[2] - mz)
+    fi[nf, 0] = u
+    if (side > 0.0) if away else (side < 0.0):
+        nx = -nx
+        ny = -ny
+        nz = -nz
+        fi[nf, 1] = w
+        fi[nf, 2] = v
+    else:
+        fi[nf, 1] = v
+        fi[nf, 2] = w
+    fi[nf, 3] = e0
+    fi[nf, 4] = e1
+    fi[nf, 5] = e2
+    ff[nf, 0] = nx
+    ff[nf, 1] = ny
+    ff[nf, 2] = nz
+    ff[nf, 3] = mx
+    ff[nf, 4] = my
+    ff[nf, 5] = mz
+    ff[nf, 6] = 0.5 * c2
+    for e in (e0, e1, e2):
+        c = ecnt[e]
+        if c < MAX_PER_EDGE:
+            eface[e, c] = nf
+        ecnt[e] = c + 1
+    return nf + 1
 
 
 @njit(cache=True)
-def find_facets(nodes, adj, start, deg, origin, orient_away, max_facets, min_quality):
-    """All 3-cycles of the graph as oriented facets, Eq. (1).
+def triangulate_graph(nodes, edges, origin, away, max_facets, min_quality):
+    """Facets of a graph: 3-cycles, then quads closed by their shorter diagonal (SPEC §4).
+
+    Every 3-cycle is a facet. A chordless 4-cycle whose four edges each border at most one facet
+    is a quad hole of the mesh: it gets its shorter diagonal (``a-c`` on a tie), and every
+    3-cycle through the new edge becomes a facet. (A chordless 4-cycle whose edges already carry
+    two facets, such as the link of a degree-4 node, is no hole and is left alone.) A facet whose
+    three edges each carry two or more other facets is internal (spanned across a closed shape
+    by diagonals, or a face of a volumetric GNG tetrahedron) and is dropped.
 
     Args:
         nodes: (n, 3) float64, metres.
-        adj, start, deg: CSR adjacency (see module docstring).
-        origin: (3,) float64, sensor position; with ``orient_away`` the facets are oriented away
-            from it instead (used with the node centroid for closed shapes).
-        orient_away: bool.
-        max_facets: capacity; enumeration stops there.
-        min_quality: facets with 2 * area / longest_edge**2 below this (slivers, collinear or
-            duplicate nodes) are skipped; an equilateral triangle scores 0.866.
+        edges: (m, 2) int64 node indices.
+        origin: (3,) float64, metres: facet normals face it, or face away from it with ``away``.
+        away: bool, orient away from ``origin`` (the caller passes the node centroid).
+        max_facets: facet capacity; enumeration stops there.
+        min_quality: sliver threshold on 2 * area / longest_edge**2 (equilateral: 0.866).
 
     Returns:
-        ``(facets, normals, centres, areas, n_facets, truncated)``; arrays have ``max_facets``
-        rows, the first ``n_facets`` valid. ``facets`` rows are wound so that the right-hand
-        normal is the oriented one.
+        ``(fi, ff, nf, truncated, n_bad, ecnt, eface)``: facet arrays (first ``nf`` rows valid,
+        internal facets already removed), whether ``max_facets`` was hit, the number of edges
+        with an out-of-range index, and the edge-to-facet table (indices before removal; only
+        meaningful when no facet was removed).
     """
     n = nodes.shape[0]
-    facets = np.empty((max_facets, 3), np.int64)
-    normals = np.empty((max_facets, 3), np.float64)
-    centres = np.empty((max_facets, 3), np.float64)
-    areas = np.empty(max_facets, np.float64)
-    mark = np.full(n, -1, np.int64)
+    valid = finite_rows(nodes)
+    adj, twin, start, cap, deg, n_bad = build_adjacency(valid, edges, SLACK)
+    total = start[n]
+    m2 = 0
+    for i in range(n):
+        m2 += deg[i]
+    ecnt = np.zeros(max(total, 1), np.int64)
+    eface = np.empty((max(total, 1), MAX_PER_EDGE), np.int64)
+    fcap = max(16, min(max_facets, m2 // 2 + 16))
+    fi = np.empty((fcap, 6), np.int64)
+    ff = np.empty((fcap, 7), np.float64)
     nf = 0
     truncated = False
+    mark = np.full(n, -1, np.int64)
+    mslot = np.empty(n, np.int64)
+
+    # All 3-cycles u < v < w; mslot[w] remembers the slot u -> w for the third edge's id.
     for u in range(n):
         su = start[u]
-        for k in range(deg[u]):
+        du = deg[u]
+        for k in range(du):
             mark[adj[su + k]] = u
-        for k in range(deg[u]):
+            mslot[adj[su + k]] = su + k
+        for k in range(du):
             v = adj[su + k]
             if v <= u:
                 continue
+            e_uv = su + k
             sv = start[v]
             for k2 in range(deg[v]):
                 w = adj[sv + k2]
@@ -224,113 +280,169 @@ def find_facets(nodes, adj, start, deg, origin, orient_away, max_facets, min_qua
                 if nf >= max_facets:
                     truncated = True
                     continue
-                # Eq. (1): N = (n0 - n1) x (n0 - n2) / |...|.
-                e1x = nodes[u, 0] - nodes[v, 0]
-                e1y = nodes[u, 1] - nodes[v, 1]
-                e1z = nodes[u, 2] - nodes[v, 2]
-                e2x = nodes[u, 0] - nodes[w, 0]
-                e2y = nodes[u, 1] - nodes[w, 1]
-                e2z = nodes[u, 2] - nodes[w, 2]
-                cx = e1y * e2z - e1z * e2y
-                cy = e1z * e2x - e1x * e2z
-                cz = e1x * e2y - e1y * e2x
-                c2 = np.sqrt(cx * cx + cy * cy + cz * cz)
-                l1 = e1x * e1x + e1y * e1y + e1z * e1z
-                l2 = e2x * e2x + e2y * e2y + e2z * e2z
-                l3 = _sqdist(nodes, v, w)
-                longest = max(l1, max(l2, l3))
-                if not (c2 > 1e-14) or c2 < min_quality * longest:
+                if nf >= fi.shape[0]:
+                    fi, ff = _grow(fi, ff)
+                nf = _add_facet(
+                    nodes,
+                    u,
+                    v,
+                    w,
+                    e_uv,
+                    sv + k2,
+                    mslot[w],
+                    origin,
+                    away,
+                    min_quality,
+                    fi,
+                    ff,
+                    nf,
+                    ecnt,
+                    eface,
+                )
+
+    # Quad holes a-b-c-d, found once from their lowest node a with b < d.
+    mark[:] = -1
+    for a in range(n):
+        if deg[a] < 2:
+            continue
+        sa = start[a]
+        for k in range(deg[a]):
+            mark[adj[sa + k]] = a
+            mslot[adj[sa + k]] = sa + k
+        ka = 0
+        while ka < deg[a]:
+            s_ab = sa + ka
+            ka += 1
+            b = adj[s_ab]
+            if b < a or ecnt[min(s_ab, twin[s_ab])] >= 2:
+                continue
+            sb = start[b]
+            for kb in range(deg[b]):
+                s_bc = sb + kb
+                c = adj[s_bc]
+                if c <= a or mark[c] == a or ecnt[min(s_bc, twin[s_bc])] >= 2:
                     continue
-                nx = cx / c2
-                ny = cy / c2
-                nz = cz / c2
-                mx = (nodes[u, 0] + nodes[v, 0] + nodes[w, 0]) / 3.0
-                my = (nodes[u, 1] + nodes[v, 1] + nodes[w, 1]) / 3.0
-                mz = (nodes[u, 2] + nodes[v, 2] + nodes[w, 2]) / 3.0
-                side = nx * (origin[0] - mx) + ny * (origin[1] - my) + nz * (origin[2] - mz)
-                flip = side > 0.0 if orient_away else side < 0.0
-                facets[nf, 0] = u
-                if flip:
-                    nx, ny, nz = -nx, -ny, -nz
-                    facets[nf, 1] = w
-                    facets[nf, 2] = v
-                else:
-                    facets[nf, 1] = v
-                    facets[nf, 2] = w
-                normals[nf, 0] = nx
-                normals[nf, 1] = ny
-                normals[nf, 2] = nz
-                centres[nf, 0] = mx
-                centres[nf, 1] = my
-                centres[nf, 2] = mz
-                areas[nf] = 0.5 * c2
-                nf += 1
-    return facets, normals, centres, areas, nf, truncated
+                sc = start[c]
+                for kc in range(deg[c]):
+                    s_cd = sc + kc
+                    d = adj[s_cd]
+                    if d <= b or mark[d] != a or ecnt[min(s_cd, twin[s_cd])] >= 2:
+                        continue
+                    s_ad = mslot[d]
+                    if ecnt[min(s_ad, twin[s_ad])] >= 2:
+                        continue
+                    # Facets added for an earlier quad may have closed this one.
+                    if mark[c] == a or ecnt[min(s_ab, twin[s_ab])] >= 2:
+                        break
+                    if ecnt[min(s_bc, twin[s_bc])] >= 2:
+                        break
+                    if _row_find(adj, start, deg, b, d) >= 0:
+                        continue
+                    if _sqdist(nodes, a, c) <= _sqdist(nodes, b, d):
+                        p = a
+                        q = c
+                    else:
+                        p = b
+                        q = d
+                    if deg[p] >= cap[p] or deg[q] >= cap[q]:
+                        continue
+                    sp = start[p] + deg[p]
+                    sq = start[q] + deg[q]
+                    adj[sp] = q
+                    adj[sq] = p
+                    twin[sp] = sq
+                    twin[sq] = sp
+                    deg[p] += 1
+                    deg[q] += 1
+                    if p == a:
+                        mark[c] = a
+                        mslot[c] = sp
+                    e_pq = min(sp, sq)
+                    # Every 3-cycle through the new edge p-q is a facet.
+                    for kp in range(deg[p] - 1):
+                        s_px = start[p] + kp
+                        x = adj[s_px]
+                        s_qx = _row_find(adj, start, deg, q, x)
+                        if s_qx < 0:
+                            continue
+                        if nf >= max_facets:
+                            truncated = True
+                            continue
+                        if nf >= fi.shape[0]:
+                            fi, ff = _grow(fi, ff)
+                        nf = _add_facet(
+                            nodes,
+                            p,
+                            q,
+                            x,
+                            e_pq,
+                            min(s_qx, twin[s_qx]),
+                            min(s_px, twin[s_px]),
+                            origin,
+                            away,
+                            min_quality,
+                            fi,
+                            ff,
+                            nf,
+                            ecnt,
+                            eface,
+                        )
+                    if p == a:
+                        break
+
+    # Drop internal facets (all three edges shared with two or more other facets).
+    nk = 0
+    for f in range(nf):
+        if ecnt[fi[f, 3]] >= 3 and ecnt[fi[f, 4]] >= 3 and ecnt[fi[f, 5]] >= 3:
+            continue
+        if nk != f:
+            fi[nk] = fi[f]
+            ff[nk] = ff[f]
+        nk += 1
+    if nk != nf:
+        # Rebuild the edge-to-facet table for the kept facets.
+        ecnt[:] = 0
+        for f in range(nk):
+            for e in range(3):
+                eid = fi[f, 3 + e]
+                c = ecnt[eid]
+                if c < MAX_PER_EDGE:
+                    eface[eid, c] = f
+                ecnt[eid] = c + 1
+    return fi, ff, nk, truncated, n_bad, ecnt, eface
 
 
 @njit(cache=True)
-def _facet_edge_slot(adj, start, deg, facets, f, e):
-    a = facets[f, e]
-    b = facets[f, (e + 1) % 3]
-    if a < b:
-        return _row_find(adj, start, deg, a, b)
-    return _row_find(adj, start, deg, b, a)
+def facet_links(fi, ff, nf, ecnt, eface):
+    """Facet-to-facet links across shared edges, with the cosine of the Eq. (2) weight.
 
-
-@njit(cache=True)
-def facet_neighbours(adj, start, deg, facets, normals, nf):
-    """Facet-to-facet links across shared edges with their Eq. (2) weights.
-
-    A facet whose three edges each carry two or more other facets is internal (a triangle
-    spanned across a closed shape by diagonals, or a tetrahedron face of a volumetric GNG
-    artefact) and is dropped. On an edge shared by more than two facets the link goes to the
-    most coplanar one, so each facet keeps at most three links (§4.2).
+    On an edge shared by more than two facets the link goes to the most coplanar one, so each
+    facet keeps at most three links (§4.2).
 
     Returns:
-        ``(keep, nbr, wgt)``: (nf,) bool, (nf, 3) int64 neighbour across edge ``e`` (from vertex
-        ``e`` to ``e + 1``) or -1, (nf, 3) float64 weight w_ij in radians (inf without link).
+        ``(nbr, ncos)``: (nf, 3) int64 neighbour across each edge or -1, and (nf, 3) float64
+        ``cos w_ij`` (-2 without link). Eq. (2) is ``w_ij = arccos(ncos)``; the kernels compare
+        cosines, which is the same test without the arccos.
     """
-    total = start[start.shape[0] - 1]
-    ecnt = np.zeros(max(total, 1), np.int64)
-    eface = np.empty((max(total, 1), MAX_FACETS_PER_EDGE), np.int64)
-    slots = np.empty((nf, 3), np.int64)
-    for f in range(nf):
-        for e in range(3):
-            s = _facet_edge_slot(adj, start, deg, facets, f, e)
-            slots[f, e] = s
-            c = ecnt[s]
-            if c < MAX_FACETS_PER_EDGE:
-                eface[s, c] = f
-            ecnt[s] = c + 1
-    keep = np.empty(nf, np.bool_)
-    for f in range(nf):
-        keep[f] = not (ecnt[slots[f, 0]] >= 3 and ecnt[slots[f, 1]] >= 3 and ecnt[slots[f, 2]] >= 3)
     nbr = np.full((nf, 3), -1, np.int64)
-    wgt = np.full((nf, 3), np.inf)
+    ncos = np.full((nf, 3), -2.0)
     for f in range(nf):
-        if not keep[f]:
-            continue
         for e in range(3):
-            s = slots[f, e]
+            eid = fi[f, 3 + e]
             best = -1
-            bestw = np.inf
-            for q in range(min(ecnt[s], MAX_FACETS_PER_EDGE)):
-                g = eface[s, q]
-                if g == f or not keep[g]:
+            bestc = -2.0
+            for q in range(min(ecnt[eid], MAX_PER_EDGE)):
+                g = eface[eid, q]
+                if g == f:
                     continue
-                # Eq. (2): w_ij = arccos(N_i . N_j / (|N_i| |N_j|)); the normals are unit.
-                c = (
-                    normals[f, 0] * normals[g, 0]
-                    + normals[f, 1] * normals[g, 1]
-                    + normals[f, 2] * normals[g, 2]
-                )
-                w = np.arccos(min(1.0, max(-1.0, c)))
-                if w < bestw:
-                    bestw = w
+                # Eq. (2) with unit normals: cos w_ij = N_i . N_j.
+                c = ff[f, 0] * ff[g, 0] + ff[f, 1] * ff[g, 1] + ff[f, 2] * ff[g, 2]
+                if c > bestc:
+                    bestc = c
                     best = g
             nbr[f, e] = best
-            wgt[f, e] = bestw
-    return keep, nbr, wgt
+            ncos[f, e] = bestc
+    return nbr, ncos
 
 
 @njit(cache=True)
@@ -343,228 +455,172 @@ def _tilt(sx, sy, sz):
 
 
 @njit(cache=True)
-def _components(nf, nbr, group, wall_of, labels, stack):
-    """Label connected facets of equal (group, wall_of); return the number of labels."""
-    for f in range(nf):
-        labels[f] = -1
-    k = 0
-    for s in range(nf):
-        if labels[s] >= 0:
-            continue
-        labels[s] = k
-        stack[0] = s
-        top = 1
-        while top > 0:
-            top -= 1
-            i = stack[top]
-            for e in range(3):
-                j = nbr[i, e]
-                if j < 0 or labels[j] >= 0:
-                    continue
-                if group[j] != group[i] or wall_of[j] != wall_of[i]:
-                    continue
-                labels[j] = k
-                stack[top] = j
-                top += 1
-        k += 1
-    return k
+def _centroid(nodes, edges):
+    """Mean of the finite nodes that carry an edge (orientation centre for closed shapes)."""
+    n = nodes.shape[0]
+    used = np.zeros(n, np.bool_)
+    for e in range(edges.shape[0]):
+        for c in range(2):
+            i = edges[e, c]
+            if 0 <= i < n:
+                used[i] = True
+    out = np.zeros(3)
+    cnt = 0
+    for i in range(n):
+        if used[i] and np.isfinite(nodes[i, 0] + nodes[i, 1] + nodes[i, 2]):
+            out[0] += nodes[i, 0]
+            out[1] += nodes[i, 1]
+            out[2] += nodes[i, 2]
+            cnt += 1
+    if cnt > 0:
+        out /= cnt
+    return out
 
 
 @njit(cache=True)
-def detect_kernel(
-    nodes,
-    edges,
-    origin,
-    orient_away,
-    forward_xy,
-    ground_z,
-    ground_known,
-    max_facets,
-    min_quality,
-    grow_angle,
-    region_angle,
-    terrain_max_tilt,
-    wall_min_tilt,
-    wall_min_height,
-    ground_tolerance,
-    ground_area_share,
-    density_threshold,
-):
+def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
     """Affordance detection on a graph, §4.2: triangulate, Eq. (1)–(2), segment, Eq. (3)–(4).
 
     Args:
         nodes: (n, 3) float64, metres, world frame, z up.
         edges: (m, 2) int64.
-        origin: (3,) float64 sensor position (or the node centroid with ``orient_away``).
-        orient_away: bool, orient facets away from ``origin`` instead of towards it.
-        forward_xy: (2,) float64 unit walking direction in the ground plane.
-        ground_z: float, metres, used when ``ground_known``.
-        ground_known: bool, else the ground is estimated from near-horizontal regions.
-        max_facets, min_quality: see :func:`find_facets`.
-        grow_angle, region_angle, terrain_max_tilt, wall_min_tilt: radians.
-        wall_min_height, ground_tolerance: metres.
-        ground_area_share: float in (0, 1].
-        density_threshold: nodes per m², v of §4.2.
+        origin: (3,) float64 sensor position (ignored with ``MODE_ORIENT_AWAY``, which orients
+            facets away from the node centroid).
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        ground_z: metres, used with ``MODE_GROUND_KNOWN``; else the ground is estimated.
+        mode: bit mask of ``MODE_*``.
+        prm: (N_PARAMS,) float64 packed parameters (``P_*`` indices).
 
     Returns:
-        A tuple ``(n_bad, truncated, ground, facets, normals, flabels, kind, pos, normal,
-        height, width, length, gamma, density, size, n_nodes, box)``; facet arrays have F rows,
-        label arrays K rows, ``box`` is (K, 2, 3) min/max corners.
+        ``(n_bad, truncated, ground, facets, normals, flabels, lab, sboxes)``: out-of-range edge
+        count, capacity flag, ground level used (NaN without facets), (F, 3) int64 facets,
+        (F, 3) float64 unit normals, (F,) int64 labels, (K, N_LABEL_COLS) float64 label table
+        (``L_*`` columns), (S, 2, 3) float64 padded boxes of the suspected objects.
     """
     n = nodes.shape[0]
-    valid = finite_rows(nodes)
-    adj, start, cap, deg, n_bad = build_adjacency(valid, edges, DIAGONAL_SLACK)
-    add_diagonals(nodes, adj, start, cap, deg)
-    if orient_away:
-        origin = np.zeros(3)
-        cnt = 0
-        for i in range(n):
-            if deg[i] > 0:
-                origin += nodes[i]
-                cnt += 1
-        if cnt > 0:
-            origin /= cnt
-    facets0, normals0, centres0, areas0, nf0, truncated = find_facets(
-        nodes, adj, start, deg, origin, orient_away, max_facets, min_quality
+    away = (mode & MODE_ORIENT_AWAY) != 0
+    if away:
+        origin = _centroid(nodes, edges)
+    fi, ff, nf, truncated, n_bad, ecnt, eface = triangulate_graph(
+        nodes, edges, origin, away, int(prm[P_MAX_FACETS]), prm[P_MIN_QUALITY]
     )
-    keep, nbr0, wgt0 = facet_neighbours(adj, start, deg, facets0, normals0, nf0)
+    nbr, ncos = facet_links(fi, ff, nf, ecnt, eface)
+    cos_grow = prm[P_COS_GROW]
+    cos_region = prm[P_COS_REGION]
+    terrain_tilt = prm[P_TERRAIN_TILT]
+    tol = prm[P_GROUND_TOL]
+    nf1 = max(nf, 1)
 
-    # Compact away the internal facets.
-    newid = np.full(nf0, -1, np.int64)
-    nf = 0
-    for f in range(nf0):
-        if keep[f]:
-            newid[f] = nf
-            nf += 1
-    facets = np.empty((nf, 3), np.int64)
-    normals = np.empty((nf, 3), np.float64)
-    centres = np.empty((nf, 3), np.float64)
-    areas = np.empty(nf, np.float64)
-    nbr = np.empty((nf, 3), np.int64)
-    wgt = np.empty((nf, 3), np.float64)
-    for f in range(nf0):
-        g = newid[f]
-        if g < 0:
-            continue
-        for c in range(3):
-            facets[g, c] = facets0[f, c]
-            normals[g, c] = normals0[f, c]
-            centres[g, c] = centres0[f, c]
-            j = nbr0[f, c]
-            nbr[g, c] = newid[j] if j >= 0 else -1
-            wgt[g, c] = wgt0[f, c]
-        areas[g] = areas0[f]
-
-    # Region growing on the Eq. (2) weights: a facet joins its neighbour's region when the link
-    # weight is below grow_angle and its normal is within region_angle of the region's running
-    # mean normal (the second test stops the drift of a purely local criterion round bends).
-    cos_region = np.cos(region_angle)
-    region = np.full(nf, -1, np.int64)
-    stack = np.empty(max(nf, 1), np.int64)
-    rsum = np.zeros((max(nf, 1), 3))
+    # Region growing on the Eq. (2) weights: a facet joins a neighbour's region when the link
+    # weight is below the growing angle and its normal is within the region angle of the
+    # region's running mean normal (the second test stops a purely local criterion from
+    # drifting round a bend). Per region: normal sum, area, area-weighted height, top node.
+    region = np.full(nf1, -1, np.int64)
+    stack = np.empty(nf1, np.int64)
+    rsum = np.empty((nf1, 3))
+    rarea = np.empty(nf1)
+    rz = np.empty(nf1)
+    rtop = np.empty(nf1)
     nreg = 0
     for s in range(nf):
         if region[s] >= 0:
             continue
         region[s] = nreg
-        sx = normals[s, 0]
-        sy = normals[s, 1]
-        sz = normals[s, 2]
+        sx = 0.0
+        sy = 0.0
+        sz = 0.0
+        area = 0.0
+        zsum = 0.0
+        top = -np.inf
         stack[0] = s
-        top = 1
-        while top > 0:
-            top -= 1
-            i = stack[top]
+        sp = 1
+        while sp > 0:
+            sp -= 1
+            i = stack[sp]
+            sx += ff[i, 0]
+            sy += ff[i, 1]
+            sz += ff[i, 2]
+            area += ff[i, 6]
+            zsum += ff[i, 6] * ff[i, 5]
+            for c in range(3):
+                top = max(top, nodes[fi[i, c], 2])
             for e in range(3):
                 j = nbr[i, e]
-                if j < 0 or region[j] >= 0 or wgt[i, e] > grow_angle:
+                if j < 0 or region[j] >= 0 or ncos[i, e] < cos_grow:
                     continue
                 ns = np.sqrt(sx * sx + sy * sy + sz * sz)
-                d = normals[j, 0] * sx + normals[j, 1] * sy + normals[j, 2] * sz
-                if d < cos_region * ns:
+                if ff[j, 0] * sx + ff[j, 1] * sy + ff[j, 2] * sz < cos_region * ns:
                     continue
                 region[j] = nreg
-                sx += normals[j, 0]
-                sy += normals[j, 1]
-                sz += normals[j, 2]
-                stack[top] = j
-                top += 1
+                stack[sp] = j
+                sp += 1
         rsum[nreg, 0] = sx
         rsum[nreg, 1] = sy
         rsum[nreg, 2] = sz
+        rarea[nreg] = area
+        rz[nreg] = zsum / area
+        rtop[nreg] = top
         nreg += 1
-
-    # Per-region area, area-weighted mean height, highest vertex.
-    rarea = np.zeros(max(nreg, 1))
-    rz = np.zeros(max(nreg, 1))
-    rtop = np.full(max(nreg, 1), -np.inf)
-    for f in range(nf):
-        r = region[f]
-        rarea[r] += areas[f]
-        rz[r] += areas[f] * centres[f, 2]
-        for c in range(3):
-            rtop[r] = max(rtop[r], nodes[facets[f, c], 2])
     rtilt = np.empty(max(nreg, 1))
     for r in range(nreg):
-        rz[r] /= rarea[r]
         rtilt[r] = _tilt(rsum[r, 0], rsum[r, 1], rsum[r, 2])
 
     # Ground level: given, or the lowest near-horizontal region among those with at least
-    # ground_area_share of the largest one's area (a big box top must not pass for the floor).
-    ground = ground_z
-    if not ground_known:
+    # P_GROUND_SHARE of the largest one's area (a big box top must not pass for the floor),
+    # else the lowest facet node.
+    if (mode & MODE_GROUND_KNOWN) != 0:
+        ground = ground_z
+    else:
         amax = 0.0
         for r in range(nreg):
-            if rtilt[r] <= terrain_max_tilt and rarea[r] > amax:
+            if rtilt[r] <= terrain_tilt and rarea[r] > amax:
                 amax = rarea[r]
         ground = np.inf
         for r in range(nreg):
-            if rtilt[r] <= terrain_max_tilt and rarea[r] >= ground_area_share * amax:
+            if rtilt[r] <= terrain_tilt and rarea[r] >= prm[P_GROUND_SHARE] * amax:
                 ground = min(ground, rz[r])
-        if not np.isfinite(ground):
-            ground = np.inf
+        if ground == np.inf:
             for f in range(nf):
                 for c in range(3):
-                    ground = min(ground, nodes[facets[f, c], 2])
-            if not np.isfinite(ground):
-                ground = np.nan
+                    ground = min(ground, nodes[fi[f, c], 2])
+        if ground == np.inf:
+            ground = np.nan
 
     # Region classes.
     rkind = np.empty(max(nreg, 1), np.int64)
     for r in range(nreg):
-        if rtilt[r] <= terrain_max_tilt and abs(rz[r] - ground) <= ground_tolerance:
+        if rtilt[r] <= terrain_tilt and abs(rz[r] - ground) <= tol:
             rkind[r] = KIND_TERRAIN
-        elif rtilt[r] >= wall_min_tilt and rtop[r] - ground >= wall_min_height:
+        elif rtilt[r] >= prm[P_WALL_TILT] and rtop[r] - ground >= prm[P_WALL_HEIGHT]:
             rkind[r] = KIND_WALL
         else:
             rkind[r] = KIND_OBJECT
 
-    # Facet groups; object facets are merged into connected components (top, sides and the
-    # bevels a GNG puts round a block make one object). A component whose top stays within the
-    # ground tolerance is terrain; one touching a wall is part of that wall (the bevel at the
-    # foot of a wall).
-    group = np.empty(nf, np.int64)
-    wall_of = np.full(nf, -1, np.int64)
+    # Facet groups. Connected object facets form one object (a block's top, its short sides and
+    # the bevels a GNG puts round its base); a component whose top stays within the ground
+    # tolerance is terrain, one touching a wall belongs to that wall (the bevel at its foot).
+    group = np.empty(nf1, np.int64)
+    wall_of = np.full(nf1, -1, np.int64)
     for f in range(nf):
         group[f] = rkind[region[f]]
         if group[f] == KIND_WALL:
             wall_of[f] = region[f]
-    comp = np.full(nf, -1, np.int64)
-    members = np.empty(max(nf, 1), np.int64)
+    seen = np.zeros(nf1, np.bool_)
     for s in range(nf):
-        if group[s] != KIND_OBJECT or comp[s] >= 0:
+        if group[s] != KIND_OBJECT or seen[s]:
             continue
-        comp[s] = s
-        members[0] = s
+        seen[s] = True
+        stack[0] = s
         size = 1
         head = 0
         ctop = -np.inf
         touch_wall = -1
         while head < size:
-            i = members[head]
+            i = stack[head]
             head += 1
             for c in range(3):
-                ctop = max(ctop, nodes[facets[i, c], 2])
+                ctop = max(ctop, nodes[fi[i, c], 2])
             for e in range(3):
                 j = nbr[i, e]
                 if j < 0:
@@ -572,60 +628,52 @@ def detect_kernel(
                 if group[j] == KIND_WALL:
                     if touch_wall < 0:
                         touch_wall = wall_of[j]
-                    continue
-                if group[j] != KIND_OBJECT or comp[j] >= 0:
-                    continue
-                comp[j] = s
-                members[size] = j
-                size += 1
-        if ctop - ground <= ground_tolerance:
+                elif group[j] == KIND_OBJECT and not seen[j]:
+                    seen[j] = True
+                    stack[size] = j
+                    size += 1
+        if ctop - ground <= tol:
             for q in range(size):
-                group[members[q]] = KIND_TERRAIN
+                group[stack[q]] = KIND_TERRAIN
         elif touch_wall >= 0:
             for q in range(size):
-                group[members[q]] = KIND_WALL
-                wall_of[members[q]] = touch_wall
+                group[stack[q]] = KIND_WALL
+                wall_of[stack[q]] = touch_wall
 
-    # Final labels: connected facets of one group (one wall region per wall).
-    flabels = np.empty(nf, np.int64)
-    nlab = _components(nf, nbr, group, wall_of, flabels, stack)
-
-    # Counting sort of facets by label.
-    beg = np.zeros(nlab + 1, np.int64)
-    for f in range(nf):
-        beg[flabels[f] + 1] += 1
-    for k in range(nlab):
-        beg[k + 1] += beg[k]
-    fill = beg[:nlab].copy()
-    order = np.empty(max(nf, 1), np.int64)
-    for f in range(nf):
-        k = flabels[f]
-        order[fill[k]] = f
-        fill[k] += 1
-
-    kind = np.empty(nlab, np.int64)
-    pos = np.zeros((nlab, 3))
-    normal = np.zeros((nlab, 3))
-    height = np.empty(nlab)
-    width = np.empty(nlab)
-    length = np.empty(nlab)
-    gamma = np.empty(nlab)
-    density = np.empty(nlab)
-    size_ = np.zeros(nlab)
-    n_nodes = np.zeros(nlab, np.int64)
-    box = np.empty((nlab, 2, 3))
+    # Final labels: connected facets of one group (each wall region its own wall), with the
+    # per-label sums of §4.2.1 accumulated on the way.
+    flabels = np.full(nf, -1, np.int64)
+    lab = np.zeros((nf1, N_LABEL_COLS))
     stamp = np.full(n, -1, np.int64)
-    fx = forward_xy[0]
-    fy = forward_xy[1]
-    for k in range(nlab):
-        kind[k] = group[order[beg[k]]]
+    nlab = 0
+    nsus = 0
+    for s in range(nf):
+        if flabels[s] >= 0:
+            continue
+        k = nlab
+        nlab += 1
+        flabels[s] = k
+        gk = group[s]
+        wk = wall_of[s]
+        stack[0] = s
+        sp = 1
+        count = 0
         sx = 0.0
         sy = 0.0
         sz = 0.0
+        px = 0.0
+        py = 0.0
+        pz = 0.0
+        area = 0.0
+        nn = 0
         top = -np.inf
-        lo = np.full(3, np.inf)
-        hi = np.full(3, -np.inf)
-        # Projections along (f) and across (l) the walking direction, all nodes / high nodes.
+        lox = np.inf
+        loy = np.inf
+        loz = np.inf
+        hix = -np.inf
+        hiy = -np.inf
+        hiz = -np.inf
+        # Projections along (f) and across (l) the walking direction: all nodes, high nodes.
         af0 = np.inf
         af1 = -np.inf
         al0 = np.inf
@@ -635,18 +683,20 @@ def detect_kernel(
         hl0 = np.inf
         hl1 = -np.inf
         nh = 0
-        nn = 0
-        for idx in range(beg[k], beg[k + 1]):
-            f = order[idx]
-            # Ob^(v) and Ob^(pos) of §4.2.1: plain means of facet normals and centres.
-            sx += normals[f, 0]
-            sy += normals[f, 1]
-            sz += normals[f, 2]
+        while sp > 0:
+            sp -= 1
+            i = stack[sp]
+            count += 1
+            # Ob^(v), Ob^(pos) of §4.2.1: plain means of the facet normals and centres.
+            sx += ff[i, 0]
+            sy += ff[i, 1]
+            sz += ff[i, 2]
+            px += ff[i, 3]
+            py += ff[i, 4]
+            pz += ff[i, 5]
+            area += ff[i, 6]
             for c in range(3):
-                pos[k, c] += centres[f, c]
-            size_[k] += areas[f]
-            for c in range(3):
-                v = facets[f, c]
+                v = fi[i, c]
                 if stamp[v] == k:
                     continue
                 stamp[v] = k
@@ -655,97 +705,113 @@ def detect_kernel(
                 y = nodes[v, 1]
                 z = nodes[v, 2]
                 top = max(top, z)
-                for d in range(3):
-                    lo[d] = min(lo[d], nodes[v, d])
-                    hi[d] = max(hi[d], nodes[v, d])
+                lox = min(lox, x)
+                loy = min(loy, y)
+                loz = min(loz, z)
+                hix = max(hix, x)
+                hiy = max(hiy, y)
+                hiz = max(hiz, z)
                 pf = x * fx + y * fy
                 pl = y * fx - x * fy
                 af0 = min(af0, pf)
                 af1 = max(af1, pf)
                 al0 = min(al0, pl)
                 al1 = max(al1, pl)
-                if z > ground + ground_tolerance:
+                if z > ground + tol:
                     nh += 1
                     hf0 = min(hf0, pf)
                     hf1 = max(hf1, pf)
                     hl0 = min(hl0, pl)
                     hl1 = max(hl1, pl)
-        count = beg[k + 1] - beg[k]
-        for c in range(3):
-            pos[k, c] /= count
+            for e in range(3):
+                j = nbr[i, e]
+                if j < 0 or flabels[j] >= 0 or group[j] != gk or wall_of[j] != wk:
+                    continue
+                flabels[j] = k
+                stack[sp] = j
+                sp += 1
+        lab[k, L_KIND] = gk
+        lab[k, L_POS] = px / count
+        lab[k, L_POS + 1] = py / count
+        lab[k, L_POS + 2] = pz / count
         ns = np.sqrt(sx * sx + sy * sy + sz * sz)
         if ns > 1e-12:
-            normal[k, 0] = sx / ns
-            normal[k, 1] = sy / ns
-            normal[k, 2] = sz / ns
-        gamma[k] = _tilt(sx, sy, sz)
-        n_nodes[k] = nn
-        # Eq. (4): d = number of nodes in object / object size (facet area, m²).
-        density[k] = nn / size_[k]
-        height[k] = top - ground
-        if kind[k] == KIND_OBJECT and nh > 0:
-            length[k] = hf1 - hf0
-            width[k] = hl1 - hl0
+            lab[k, L_NORMAL] = sx / ns
+            lab[k, L_NORMAL + 1] = sy / ns
+            lab[k, L_NORMAL + 2] = sz / ns
+        lab[k, L_GAMMA] = _tilt(sx, sy, sz)
+        lab[k, L_SIZE] = area
+        lab[k, L_NNODES] = nn
+        # Eq. (4): d = number of nodes in the object / object size (facet area, m²).
+        lab[k, L_DENSITY] = nn / area
+        lab[k, L_HEIGHT] = top - ground
+        if gk == KIND_OBJECT and nh > 0:
+            lab[k, L_LENGTH] = hf1 - hf0
+            lab[k, L_WIDTH] = hl1 - hl0
         else:
-            length[k] = af1 - af0
-            width[k] = al1 - al0
-        for d in range(3):
-            box[k, 0, d] = lo[d]
-            box[k, 1, d] = hi[d]
+            lab[k, L_LENGTH] = af1 - af0
+            lab[k, L_WIDTH] = al1 - al0
+        lab[k, L_BOX] = lox
+        lab[k, L_BOX + 1] = loy
+        lab[k, L_BOX + 2] = loz
+        lab[k, L_BOX + 3] = hix
+        lab[k, L_BOX + 4] = hiy
+        lab[k, L_BOX + 5] = hiz
+        if gk == KIND_OBJECT and nn / area < prm[P_DENSITY]:
+            lab[k, L_SUSPECTED] = 1.0
+            nsus += 1
+
+    pad = prm[P_PADDING]
+    sboxes = np.empty((nsus, 2, 3))
+    q = 0
+    for k in range(nlab):
+        if lab[k, L_SUSPECTED] != 0.0:
+            for d in range(3):
+                sboxes[q, 0, d] = lab[k, L_BOX + d] - pad
+                sboxes[q, 1, d] = lab[k, L_BOX + 3 + d] + pad
+            q += 1
     return (
         n_bad,
         truncated,
         ground,
-        facets,
-        normals,
+        fi[:nf, :3].copy(),
+        ff[:nf, :3].copy(),
         flabels,
-        kind,
-        pos,
-        normal,
-        height,
-        width,
-        length,
-        gamma,
-        density,
-        size_,
-        n_nodes,
-        box,
+        lab[:nlab].copy(),
+        sboxes,
     )
 
 
 @njit(cache=True)
-def triangulate_kernel(nodes, edges, origin, orient_away, max_facets, min_quality):
-    """Facets of a graph without segmentation: ``(facets (F, 3), normals (F, 3), n_bad)``."""
-    n = nodes.shape[0]
-    valid = finite_rows(nodes)
-    adj, start, cap, deg, n_bad = build_adjacency(valid, edges, DIAGONAL_SLACK)
-    add_diagonals(nodes, adj, start, cap, deg)
-    if orient_away:
-        origin = np.zeros(3)
-        cnt = 0
-        for i in range(n):
-            if deg[i] > 0:
-                origin += nodes[i]
-                cnt += 1
-        if cnt > 0:
-            origin /= cnt
-    facets0, normals0, _, _, nf0, _ = find_facets(
-        nodes, adj, start, deg, origin, orient_away, max_facets, min_quality
+def triangulate_kernel(nodes, edges, origin, away, max_facets, min_quality):
+    """Facets of a graph without segmentation: ``(facets, normals, n_bad)``."""
+    if away:
+        origin = _centroid(nodes, edges)
+    fi, ff, nf, _, n_bad, _, _ = triangulate_graph(
+        nodes, edges, origin, away, max_facets, min_quality
     )
-    keep, _, _ = facet_neighbours(adj, start, deg, facets0, normals0, nf0)
-    nf = 0
-    for f in range(nf0):
-        if keep[f]:
-            nf += 1
-    facets = np.empty((nf, 3), np.int64)
-    normals = np.empty((nf, 3), np.float64)
-    g = 0
-    for f in range(nf0):
-        if keep[f]:
-            facets[g] = facets0[f]
-            normals[g] = normals0[f]
-            g += 1
-    return facets, normals, n_bad
+    return fi[:nf, :3].copy(), ff[:nf, :3].copy(), n_bad
+
+
+@njit(cache=True)
+def facet_weights_kernel(nodes, edges, origin, away, max_facets, min_quality):
+    """Facets, normals and Eq. (2) links: ``(facets, normals, nbr (F, 3), w (F, 3) radians)``.
+
+    ``w`` is ``inf`` where a facet has no neighbour across an edge.
+    """
+    if away:
+        origin = _centroid(nodes, edges)
+    fi, ff, nf, _, _, ecnt, eface = triangulate_graph(
+        nodes, edges, origin, away, max_facets, min_quality
+    )
+    nbr, ncos = facet_links(fi, ff, nf, ecnt, eface)
+    w = np.full((nf, 3), np.inf)
+    for f in range(nf):
+        for e in range(3):
+            if nbr[f, e] >= 0:
+                # Eq. (2): w_ij = arccos(N_i . N_j / (|N_i| |N_j|)).
+                w[f, e] = np.arccos(min(1.0, max(-1.0, ncos[f, e])))
+    return fi[:nf, :3].copy(), ff[:nf, :3].copy(), nbr, w
 
 
 @njit(cache=True)

@@ -33,7 +33,8 @@ Layout of the packed state (one net; ML-GNG stacks a leading layer axis):
 * ``fnode`` (3, M) float64: rows ``R_E`` scaled error, ``R_U`` scaled utility, ``R_D`` strength δ.
 * ``inode`` (9, M) int64: degree, alive flag, grid next/prev, grid cell x/y/z, alive list,
   position in the alive list.
-* ``adj``   (2, M, D) int64: neighbour slot and edge age g of each neighbour-list entry.
+* ``adj``   (3, M, D) int64: neighbour slot, edge age g, and the entry's twin (the position of
+  this edge in the neighbour's own list, so both copies of an age update in O(1)).
 * ``ibuf``  (B + P,) int64: grid bucket heads (B, a power of two) then the box-point pool (P).
 * ``fsc``   (NF,) float64 and ``isc`` (NI,) int64: parameters, lazy-decay scales, counters.
 """
@@ -64,6 +65,8 @@ N_IROWS = 9
 # adj planes
 A_NBR = 0
 A_AGE = 1
+A_TWIN = 2
+N_APLANES = 3
 
 # fsc entries
 F_ETA1 = 0
@@ -78,7 +81,8 @@ F_SPOW = 8
 F_SE = 9
 F_SU = 10
 F_H = 11
-NF = 12
+F_EMAX = 12
+NF = 13
 
 # isc entries
 I_LAM = 0
@@ -103,7 +107,9 @@ I_NPOOL = 18
 I_NREMOVED = 19
 I_NINSERTED = 20
 I_NBRUTE = 21
-NI = 22
+I_EDIRTY = 22
+I_ULI = 23
+NI = 24
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -156,27 +162,15 @@ def _valid(x, y, z, lim):
     return abs(x) <= lim and abs(y) <= lim and abs(z) <= lim
 
 
-@njit(inline="always")
-def _in_any_box(x, y, z, boxes, nbox):
-    for b in range(nbox):
-        if (
-            boxes[b, 0, 0] < x
-            and x < boxes[b, 1, 0]
-            and boxes[b, 0, 1] < y
-            and y < boxes[b, 1, 1]
-            and boxes[b, 0, 2] < z
-            and z < boxes[b, 1, 2]
-        ):
-            return True
-    return False
-
-
 @njit(cache=True)
 def fill_box_pool(points, boxes, nbox, ibuf, fsc, isc):
     """Collect indices of frame points inside the attention boxes without scanning the frame.
 
-    Reads ``W``-row windows at random starts (cheap sequential reads, and on raster-ordered
-    clouds box points come in runs) until ``pool_cap`` hits or ``max_windows`` windows.
+    Reads windows of ``W`` consecutive rows at uniformly random starts (wrapping at the end,
+    so every row is equally likely to be read) until the pool holds ``pool_cap`` indices or
+    ``max_windows`` windows were read. Sequential rows cost far less than random rows, so
+    this finds box points about W/3 times cheaper than single random probes; every box point
+    is equally likely to enter the pool.
 
     Args:
         points: (N, 3) float32/float64, metres, the frame.
@@ -203,11 +197,22 @@ def fill_box_pool(points, boxes, nbox, ibuf, fsc, isc):
             x = points[j, 0]
             y = points[j, 1]
             z = points[j, 2]
-            if _valid(x, y, z, lim) and _in_any_box(x, y, z, boxes, nbox):
-                ibuf[base + npool] = j
-                npool += 1
-                if npool == cap:
-                    return npool
+            # branch-free test keeps many independent row loads in flight
+            hit = (abs(x) <= lim) & (abs(y) <= lim) & (abs(z) <= lim)
+            inside = False
+            for b in range(nbox):
+                inside |= (
+                    (boxes[b, 0, 0] < x)
+                    & (x < boxes[b, 1, 0])
+                    & (boxes[b, 0, 1] < y)
+                    & (y < boxes[b, 1, 1])
+                    & (boxes[b, 0, 2] < z)
+                    & (z < boxes[b, 1, 2])
+                )
+            ibuf[base + npool] = j
+            npool += np.int64(hit & inside)
+            if npool == cap:
+                return npool
             j += 1
             if j == n:
                 j = 0
@@ -274,6 +279,8 @@ def draw_samples(points, boxes, nbox, V, ibuf, fsc, isc):
 # --------------------------------------------------------------------------------------------
 # uniform hashed grid for the nearest-two search
 # --------------------------------------------------------------------------------------------
+# Cells are offset by half a cell so that axis-aligned planes at round coordinates (the floor
+# at z = 0) run through cell middles instead of along cell faces.
 @njit(inline="always")
 def _hash(cx, cy, cz, mask):
     return ((cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)) & mask
@@ -281,9 +288,9 @@ def _hash(cx, cy, cz, mask):
 
 @njit(inline="always")
 def _grid_link(i, pos, inode, ibuf, inv_h, mask):
-    cx = np.int64(np.floor(pos[i, 0] * inv_h))
-    cy = np.int64(np.floor(pos[i, 1] * inv_h))
-    cz = np.int64(np.floor(pos[i, 2] * inv_h))
+    cx = np.int64(np.floor(pos[i, 0] * inv_h + 0.5))
+    cy = np.int64(np.floor(pos[i, 1] * inv_h + 0.5))
+    cz = np.int64(np.floor(pos[i, 2] * inv_h + 0.5))
     inode[N_CX, i] = cx
     inode[N_CY, i] = cy
     inode[N_CZ, i] = cz
@@ -310,28 +317,30 @@ def _grid_unlink(i, inode, ibuf, mask):
 
 @njit(inline="always")
 def _grid_moved(i, pos, inode, ibuf, inv_h, mask):
-    cx = np.int64(np.floor(pos[i, 0] * inv_h))
-    cy = np.int64(np.floor(pos[i, 1] * inv_h))
-    cz = np.int64(np.floor(pos[i, 2] * inv_h))
+    cx = np.int64(np.floor(pos[i, 0] * inv_h + 0.5))
+    cy = np.int64(np.floor(pos[i, 1] * inv_h + 0.5))
+    cz = np.int64(np.floor(pos[i, 2] * inv_h + 0.5))
     if cx != inode[N_CX, i] or cy != inode[N_CY, i] or cz != inode[N_CZ, i]:
         _grid_unlink(i, inode, ibuf, mask)
         _grid_link(i, pos, inode, ibuf, inv_h, mask)
 
 
 @njit(cache=True)
-def grid_rebuild(pos, inode, adj, ibuf, fsc, isc):
-    """Choose the cell size from the current edge lengths and rebuild the grid.
+def grid_rebuild(pos, inode, adj, ibuf, fsc, isc, force):
+    """Choose the grid cell size from the current edge lengths; rebuild the grid if it changed.
 
     Cell size h = ``cell_factor`` × RMS length of each live node's first edge (≥ 1 µm; 1 m
-    before any edge exists).
+    before any edge exists). The grid is kept (it is maintained incrementally) unless h moved
+    by more than 25 % or ``force`` is set.
 
     Args:
         pos: (M, 3) float64, metres, node positions.
         inode: (9, M) int64 node integers.
-        adj: (2, M, D) int64 neighbour lists and ages.
+        adj: (3, M, D) int64 neighbour lists.
         ibuf: (B + P,) int64; bucket heads are rewritten.
         fsc: (NF,) float64 scalars; ``fsc[F_H]`` receives h.
         isc: (NI,) int64 scalars.
+        force: rebuild even if h barely changed.
     """
     n = isc[I_NALIVE]
     acc = 0.0
@@ -350,6 +359,9 @@ def grid_rebuild(pos, inode, adj, ibuf, fsc, isc):
         h = fsc[F_CELLFAC] * np.sqrt(acc / cnt)
     if not h >= 1e-6:
         h = 1e-6
+    old = fsc[F_H]
+    if not force and 0.8 * old < h and h < 1.25 * old:
+        return
     fsc[F_H] = h
     inv_h = 1.0 / h
     nb = isc[I_NBUCKET]
@@ -361,21 +373,26 @@ def grid_rebuild(pos, inode, adj, ibuf, fsc, isc):
 
 
 @njit(inline="always")
-def _gap(d, f):
-    # distance, in cells, from a point at fraction f of its cell to the cell d steps away
+def _gap2(d, f, hh):
+    # squared distance from a point at fraction f of its cell to the cell d steps away
     if d == 0:
         return 0.0
     if d < 0:
-        return f - d - 1.0
-    return d - f
+        g = f - d - 1.0
+    else:
+        g = d - f
+    return g * g * hh
 
 
 @njit(inline="always")
 def _consider(i, d, b1, d1, b2, d2):
-    # lexicographic (squared distance, slot) top-two
+    # lexicographic (squared distance, slot) top two; a node seen twice (two visited cells
+    # sharing a hash bucket) cannot take both places
     if d < d1 or (d == d1 and i < b1):
+        if i == b1:
+            return b1, d1, b2, d2
         return i, d, b1, d1
-    if d < d2 or (d == d2 and i < b2):
+    if i != b1 and (d < d2 or (d == d2 and i < b2)):
         return b1, d1, i, d
     return b1, d1, b2, d2
 
@@ -398,12 +415,13 @@ def _nearest2_brute(vx, vy, vz, pos, inode, n):
 
 @njit(inline="always")
 def _nearest2_grid(vx, vy, vz, pos, inode, ibuf, h, inv_h, mask):
-    # Exact ring search: ring r visits the cells at Chebyshev distance r, skipping those
-    # farther than the current second best; it stops once nothing outside the explored
-    # cube can beat the second best. Returns b2 = -1 when inconclusive after _RING_MAX.
-    fx = vx * inv_h
-    fy = vy * inv_h
-    fz = vz * inv_h
+    # Exact ring search: ring r visits the cells at Chebyshev distance r, skipping cells
+    # farther than the current second best, and stops once nothing outside the explored
+    # cube can beat the second best. Nodes of other cells sharing a bucket are harmless
+    # extra candidates. Returns b2 = -1 when still inconclusive after _RING_MAX.
+    fx = vx * inv_h + 0.5
+    fy = vy * inv_h + 0.5
+    fz = vz * inv_h + 0.5
     ffx = np.floor(fx)
     ffy = np.floor(fy)
     ffz = np.floor(fz)
@@ -421,34 +439,27 @@ def _nearest2_grid(vx, vy, vz, pos, inode, ibuf, h, inv_h, mask):
     d2 = np.inf
     for r in range(_RING_MAX + 1):
         for dx in range(-r, r + 1):
-            gx = _gap(dx, fx)
-            gx2 = gx * gx * hh
+            gx2 = _gap2(dx, fx, hh)
             if gx2 > d2:
                 continue
             adx = abs(dx)
             for dy in range(-r, r + 1):
-                gy = _gap(dy, fy)
-                gxy2 = gx2 + gy * gy * hh
+                gxy2 = gx2 + _gap2(dy, fy, hh)
                 if gxy2 > d2:
                     continue
                 step = 1
                 if adx != r and abs(dy) != r:
                     step = 2 * r
                 for dz in range(-r, r + 1, step):
-                    gz = _gap(dz, fz)
-                    if gxy2 + gz * gz * hh > d2:
+                    if gxy2 + _gap2(dz, fz, hh) > d2:
                         continue
-                    ccx = cx + dx
-                    ccy = cy + dy
-                    ccz = cz + dz
-                    i = ibuf[_hash(ccx, ccy, ccz, mask)]
+                    i = ibuf[_hash(cx + dx, cy + dy, cz + dz, mask)]
                     while i >= 0:
-                        if inode[N_CX, i] == ccx and inode[N_CY, i] == ccy and inode[N_CZ, i] == ccz:
-                            ex = vx - pos[i, 0]
-                            ey = vy - pos[i, 1]
-                            ez = vz - pos[i, 2]
-                            d = ex * ex + ey * ey + ez * ez
-                            b1, d1, b2, d2 = _consider(i, d, b1, d1, b2, d2)
+                        ex = vx - pos[i, 0]
+                        ey = vy - pos[i, 1]
+                        ez = vz - pos[i, 2]
+                        d = ex * ex + ey * ey + ez * ez
+                        b1, d1, b2, d2 = _consider(i, d, b1, d1, b2, d2)
                         i = inode[N_NXT, i]
         m = mfrac + r
         if b2 >= 0 and d2 < m * m * hh:
@@ -457,7 +468,7 @@ def _nearest2_grid(vx, vy, vz, pos, inode, ibuf, h, inv_h, mask):
 
 
 # --------------------------------------------------------------------------------------------
-# graph bookkeeping: neighbour lists with ages, alive list, slots
+# graph bookkeeping: neighbour lists with ages and twins, alive list, slots
 # --------------------------------------------------------------------------------------------
 @njit(inline="always")
 def _find(adj, i, j, deg):
@@ -469,37 +480,47 @@ def _find(adj, i, j, deg):
 
 @njit(inline="always")
 def _drop_entry(adj, inode, i, k):
-    # swap-remove entry k of i's neighbour list
+    # swap-remove entry k of i's list; the moved entry's twin learns its new position
     last = inode[N_DEG, i] - 1
-    adj[A_NBR, i, k] = adj[A_NBR, i, last]
-    adj[A_AGE, i, k] = adj[A_AGE, i, last]
+    if k != last:
+        j = adj[A_NBR, i, last]
+        t = adj[A_TWIN, i, last]
+        adj[A_NBR, i, k] = j
+        adj[A_AGE, i, k] = adj[A_AGE, i, last]
+        adj[A_TWIN, i, k] = t
+        adj[A_TWIN, j, t] = k
     inode[N_DEG, i] = last
 
 
 @njit(inline="always")
-def _remove_edge(adj, inode, i, j):
-    k = _find(adj, i, j, inode[N_DEG, i])
-    if k >= 0:
-        _drop_entry(adj, inode, i, k)
-    k = _find(adj, j, i, inode[N_DEG, j])
-    if k >= 0:
-        _drop_entry(adj, inode, j, k)
+def _remove_edge_at(adj, inode, i, k):
+    # remove the edge held in entry k of i's list, from both lists
+    j = adj[A_NBR, i, k]
+    kj = adj[A_TWIN, i, k]
+    _drop_entry(adj, inode, i, k)
+    _drop_entry(adj, inode, j, kj)
+    return j
 
 
 @njit(inline="always")
-def _append_edge(adj, inode, i, j):
-    d = inode[N_DEG, i]
-    adj[A_NBR, i, d] = j
-    adj[A_AGE, i, d] = 0
-    inode[N_DEG, i] = d + 1
+def _add_edge(adj, inode, i, j):
+    ki = inode[N_DEG, i]
+    kj = inode[N_DEG, j]
+    adj[A_NBR, i, ki] = j
+    adj[A_AGE, i, ki] = 0
+    adj[A_TWIN, i, ki] = kj
+    adj[A_NBR, j, kj] = i
+    adj[A_AGE, j, kj] = 0
+    adj[A_TWIN, j, kj] = ki
+    inode[N_DEG, i] = ki + 1
+    inode[N_DEG, j] = kj + 1
 
 
 @njit(cache=True)
-def _kill_node(i, inode, adj, ibuf, isc):
+def _kill_node(i, fnode, inode, adj, ibuf, fsc, isc):
     # Remove node i and all its edges (neighbours may be left isolated: caller handles them).
     while inode[N_DEG, i] > 0:
-        j = adj[A_NBR, i, inode[N_DEG, i] - 1]
-        _remove_edge(adj, inode, i, j)
+        _remove_edge_at(adj, inode, i, inode[N_DEG, i] - 1)
     inode[N_ALIVE, i] = 0
     n = isc[I_NALIVE] - 1
     p = inode[N_LPOS, i]
@@ -509,6 +530,10 @@ def _kill_node(i, inode, adj, ibuf, isc):
     isc[I_NALIVE] = n
     _grid_unlink(i, inode, ibuf, isc[I_NBUCKET] - 1)
     isc[I_NREMOVED] += 1
+    if fnode[R_E, i] >= fsc[F_EMAX]:
+        isc[I_EDIRTY] = 1
+    if isc[I_ULI] == i:
+        isc[I_ULI] = -1
 
 
 @njit(cache=True)
@@ -535,19 +560,23 @@ def _new_node(x, y, z, e, u, boxes, nbox, pos, fnode, inode, ibuf, fsc, isc):
     inode[N_LPOS, r] = n
     isc[I_NALIVE] = n + 1
     _grid_link(r, pos, inode, ibuf, 1.0 / fsc[F_H], isc[I_NBUCKET] - 1)
+    if e > fsc[F_EMAX]:
+        fsc[F_EMAX] = e
+    li = isc[I_ULI]
+    if li >= 0 and (u < fnode[R_U, li] or (u == fnode[R_U, li] and r < li)):
+        isc[I_ULI] = r
     return r
 
 
 @njit(cache=True)
-def _connect(s1, s2, adj, inode, ibuf, isc):
+def _connect(s1, s2, fnode, inode, adj, ibuf, fsc, isc):
     # Algorithm 2, lines 5–7: create edge s1–s2 or reset its age. A full neighbour list
     # (max degree D, a bound the paper's dense matrix does not have) first drops its oldest
     # edge (ties: lower neighbour slot); a node left isolated by that is removed.
     k = _find(adj, s1, s2, inode[N_DEG, s1])
     if k >= 0:
         adj[A_AGE, s1, k] = 0
-        k2 = _find(adj, s2, s1, inode[N_DEG, s2])
-        adj[A_AGE, s2, k2] = 0
+        adj[A_AGE, s2, adj[A_TWIN, s1, k]] = 0
         return
     dmax = adj.shape[2]
     for a in (s1, s2):
@@ -558,12 +587,10 @@ def _connect(s1, s2, adj, inode, ibuf, isc):
                 ab = adj[A_AGE, a, bk]
                 if ak > ab or (ak == ab and adj[A_NBR, a, kk] < adj[A_NBR, a, bk]):
                     bk = kk
-            j = adj[A_NBR, a, bk]
-            _remove_edge(adj, inode, a, j)
+            j = _remove_edge_at(adj, inode, a, bk)
             if inode[N_DEG, j] == 0:
-                _kill_node(j, inode, adj, ibuf, isc)
-    _append_edge(adj, inode, s1, s2)
-    _append_edge(adj, inode, s2, s1)
+                _kill_node(j, fnode, inode, adj, ibuf, fsc, isc)
+    _add_edge(adj, inode, s1, s2)
 
 
 @njit(cache=True)
@@ -583,6 +610,30 @@ def refresh_strength(boxes, nbox, fnode, pos, inode, isc):
         fnode[R_D, i] = _strength(pos[i, 0], pos[i, 1], pos[i, 2], boxes, nbox)
 
 
+@njit(inline="always")
+def _emax_scan(fnode, inode, fsc, isc):
+    e = -np.inf
+    for q in range(isc[I_NALIVE]):
+        v = fnode[R_E, inode[N_LIST, q]]
+        if v > e:
+            e = v
+    fsc[F_EMAX] = e
+    isc[I_EDIRTY] = 0
+
+
+@njit(inline="always")
+def _umin_scan(fnode, inode, isc):
+    lu = np.inf
+    li = -1
+    for q in range(isc[I_NALIVE]):
+        i = inode[N_LIST, q]
+        u = fnode[R_U, i]
+        if u < lu or (u == lu and i < li):
+            lu = u
+            li = i
+    isc[I_ULI] = li
+
+
 # --------------------------------------------------------------------------------------------
 # the learning cycle (Algorithm 2)
 # --------------------------------------------------------------------------------------------
@@ -598,7 +649,7 @@ def learn(V, nv, boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
         pos: (M, 3) float64, metres, node positions.
         fnode: (3, M) float64 scaled error, scaled utility, strength δ.
         inode: (9, M) int64 node integers.
-        adj: (2, M, D) int64 neighbour slots and edge ages.
+        adj: (3, M, D) int64 neighbour slots, edge ages, twins.
         ibuf: (B + P,) int64 grid buckets and pool.
         fsc: (NF,) float64 scalars.
         isc: (NI,) int64 scalars.
@@ -622,8 +673,8 @@ def learn(V, nv, boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
     dl = fnode[R_D]
     nbr = adj[A_NBR]
     age = adj[A_AGE]
+    twin = adj[A_TWIN]
     deg = inode[N_DEG]
-    alist = inode[N_LIST]
     for si in range(nv):
         vx = V[si, 0]
         vy = V[si, 1]
@@ -641,10 +692,16 @@ def learn(V, nv, boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
             s1, d1, s2, d2 = _nearest2_brute(vx, vy, vz, pos, inode, n)
             isc[I_NBRUTE] += 1
         # lines 5–7
-        _connect(s1, s2, adj, inode, ibuf, isc)
-        # lines 8–9 (squared distances, SPEC §3 / Fritzke; the paper prints the norm)
-        ee[s1] += d1 / se
+        _connect(s1, s2, fnode, inode, adj, ibuf, fsc, isc)
+        # lines 8–9 (squared distances, SPEC §3 / Fritzke; the paper prints the norm). Only
+        # s1 changes, so the max error and the min-utility node are kept incrementally.
+        e1 = ee[s1] + d1 / se
+        ee[s1] = e1
+        if e1 > fsc[F_EMAX]:
+            fsc[F_EMAX] = e1
         uu[s1] += (d2 - d1) / su
+        if s1 == isc[I_ULI]:
+            isc[I_ULI] = -1
         # line 10
         pos[s1, 0] += eta1 * (vx - pos[s1, 0])
         pos[s1, 1] += eta1 * (vy - pos[s1, 1])
@@ -663,48 +720,34 @@ def learn(V, nv, boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
             if nbox > 0:
                 dl[j] = _strength(pos[j, 0], pos[j, 1], pos[j, 2], boxes, nbox)
             a = age[s1, k] + 1
-            age[s1, k] = a
-            kj = _find(adj, j, s1, deg[j])
             if a > gmax:
-                _drop_entry(adj, inode, s1, k)
-                _drop_entry(adj, inode, j, kj)
+                _remove_edge_at(adj, inode, s1, k)
                 if deg[j] == 0:
-                    _kill_node(j, inode, adj, ibuf, isc)
+                    _kill_node(j, fnode, inode, adj, ibuf, fsc, isc)
             else:
-                age[j, kj] = a
+                age[s1, k] = a
+                age[j, twin[s1, k]] = a
         # lines 16–20: every κ inputs the utility test. u = max-error node, l = min-utility
         # node; remove l when E_u / U_l > k·δ_l. The paper prints δ_u; SPEC §3 reads the
         # intent as protecting the removal candidate, so δ_l. Written multiplied out so a
         # zero utility needs no division. Never shrinks the net below two nodes.
-        n = isc[I_NALIVE]
-        if t % kappa == 0 and n > 2:
-            emax = -np.inf
-            lu = np.inf
-            li = -1
-            for q in range(n):
-                i = alist[q]
-                e = ee[i]
-                if e > emax:
-                    emax = e
-                u = uu[i]
-                if u < lu or (u == lu and i < li):
-                    lu = u
-                    li = i
-            if emax * se > kk_ * dl[li] * lu * su:
+        if t % kappa == 0 and isc[I_NALIVE] > 2:
+            if isc[I_EDIRTY] != 0:
+                _emax_scan(fnode, inode, fsc, isc)
+            if isc[I_ULI] < 0:
+                _umin_scan(fnode, inode, isc)
+            li = isc[I_ULI]
+            if fsc[F_EMAX] * se > kk_ * dl[li] * uu[li] * su:
                 c = 0
                 for k in range(deg[li]):
                     if deg[nbr[li, k]] == 1:
                         c += 1
-                if n - 1 - c >= 2:
-                    _kill_node(li, inode, adj, ibuf, isc)
-                    # its former neighbours now without edges go as well (recheck list)
-                    q = 0
-                    while q < isc[I_NALIVE]:
-                        i = alist[q]
-                        if deg[i] == 0:
-                            _kill_node(i, inode, adj, ibuf, isc)
-                        else:
-                            q += 1
+                if isc[I_NALIVE] - 1 - c >= 2:
+                    while deg[li] > 0:
+                        j = _remove_edge_at(adj, inode, li, deg[li] - 1)
+                        if deg[j] == 0:
+                            _kill_node(j, fnode, inode, adj, ibuf, fsc, isc)
+                    _kill_node(li, fnode, inode, adj, ibuf, fsc, isc)
         # lines 21–22: decay of every error and utility, done lazily through the scales
         se *= dec_e
         su *= dec_u
@@ -736,7 +779,7 @@ def insert_node(boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
         pos: (M, 3) float64, metres.
         fnode: (3, M) float64.
         inode: (9, M) int64.
-        adj: (2, M, D) int64.
+        adj: (3, M, D) int64.
         ibuf: (B + P,) int64.
         fsc: (NF,) float64.
         isc: (NI,) int64.
@@ -775,15 +818,14 @@ def insert_node(boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc):
     a = 1.0 - fsc[F_ALPHA]
     ee[bu] *= a
     ee[bf] *= a
+    isc[I_EDIRTY] = 1
     r = _new_node(
         x, y, z, 0.5 * (ee[bu] + ee[bf]), 0.5 * (uu[bu] + uu[bf]), boxes, nbox, pos, fnode,
         inode, ibuf, fsc, isc,
     )
-    _remove_edge(adj, inode, bu, bf)
-    _append_edge(adj, inode, bu, r)
-    _append_edge(adj, inode, r, bu)
-    _append_edge(adj, inode, bf, r)
-    _append_edge(adj, inode, r, bf)
+    _remove_edge_at(adj, inode, bu, _find(adj, bu, bf, inode[N_DEG, bu]))
+    _add_edge(adj, inode, bu, r)
+    _add_edge(adj, inode, bf, r)
     isc[I_NINSERTED] += 1
     return r
 
@@ -800,6 +842,8 @@ def _renormalise(fnode, inode, fsc, isc):
             fnode[R_U, i] *= su
         fsc[F_SE] = 1.0
         fsc[F_SU] = 1.0
+        isc[I_EDIRTY] = 1
+        isc[I_ULI] = -1
 
 
 @njit(cache=True)
@@ -814,7 +858,7 @@ def cycle(points, boxes, nbox, pos, V, fnode, inode, adj, ibuf, fsc, isc):
         V: (λ, 3) float64 work buffer for the input signals.
         fnode: (3, M) float64 scaled error, scaled utility, strength.
         inode: (9, M) int64 node integers.
-        adj: (2, M, D) int64 neighbour lists and ages.
+        adj: (3, M, D) int64 neighbour lists, ages, twins.
         ibuf: (B + P,) int64 grid buckets and box pool.
         fsc: (NF,) float64 scalars.
         isc: (NI,) int64 scalars.
@@ -832,10 +876,13 @@ def cycle(points, boxes, nbox, pos, V, fnode, inode, adj, ibuf, fsc, isc):
         # Algorithm 1, line 1: two initial nodes, here at two random frame points
         j = min(1, nv - 1)
         fsc[F_H] = 1.0
-        grid_rebuild(pos, inode, adj, ibuf, fsc, isc)
+        grid_rebuild(pos, inode, adj, ibuf, fsc, isc, True)
+        fsc[F_EMAX] = 0.0
+        isc[I_EDIRTY] = 0
+        isc[I_ULI] = -1
         _new_node(V[0, 0], V[0, 1], V[0, 2], 0.0, 0.0, boxes, nbox, pos, fnode, inode, ibuf, fsc, isc)
         _new_node(V[j, 0], V[j, 1], V[j, 2], 0.0, 0.0, boxes, nbox, pos, fnode, inode, ibuf, fsc, isc)
-    grid_rebuild(pos, inode, adj, ibuf, fsc, isc)
+    grid_rebuild(pos, inode, adj, ibuf, fsc, isc, False)
     learn(V, nv, boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc)
     insert_node(boxes, nbox, pos, fnode, inode, adj, ibuf, fsc, isc)
     return nv
@@ -855,7 +902,7 @@ def cycle_layers(points, boxes, nbox, pos, V, fnode, inode, adj, ibuf, fsc, isc)
         V: (λ, 3) float64 shared work buffer.
         fnode: (L, 3, M) float64.
         inode: (L, 9, M) int64.
-        adj: (L, 2, M, D) int64.
+        adj: (L, 3, M, D) int64.
         ibuf: (L, B + P) int64.
         fsc: (L, NF) float64.
         isc: (L, NI) int64.
@@ -877,14 +924,14 @@ def export_graph(pos, fnode, inode, adj, out_nodes, out_edges, out_strength):
     """Compact the live nodes (ascending slot order) and list each edge once.
 
     Edges come out as (i, j) with i < j in compacted indices, sorted lexicographically.
-    Rows beyond the output capacity are dropped (nodes first-come by slot, and edges that
-    touch a dropped node); the returned counts are those written.
+    Rows beyond the output capacity are dropped (nodes by slot order, and edges that touch
+    a dropped node); the returned counts are those written.
 
     Args:
         pos: (M, 3) float64, metres.
         fnode: (3, M) float64.
         inode: (9, M) int64.
-        adj: (2, M, D) int64.
+        adj: (3, M, D) int64.
         out_nodes: (Nmax, 3) float64 output, metres.
         out_edges: (Emax, 2) int64 output.
         out_strength: (Nmax,) float64 output, δ.

@@ -187,7 +187,7 @@ class _Net:
         self.pos = np.zeros((m, 3))
         self.fnode = np.zeros((K.N_FROWS, m))
         self.inode = np.zeros((K.N_IROWS, m), dtype=np.int64)
-        self.adj = np.zeros((2, m, p.max_degree), dtype=np.int64)
+        self.adj = np.zeros((K.N_APLANES, m, p.max_degree), dtype=np.int64)
         self.ibuf = np.full(nbucket + p.box_pool_size, -1, dtype=np.int64)
         self.fsc = np.zeros(K.NF)
         self.isc = np.zeros(K.NI, dtype=np.int64)

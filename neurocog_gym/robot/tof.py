@@ -164,7 +164,7 @@ class ToFParams:
         return 1.0 / self.fps
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ToFFrame:
     """One frame of the sensor array (S sensors of H × W pixels).
 
@@ -247,7 +247,6 @@ class ToFArray:
         s, n = p.n_sensors, p.width * p.height
         self._n = n
         self._vec = np.zeros((s, n, 3))  # world-frame rays for mj_multiRay
-        self._vec_flat = [self._vec[i].reshape(-1) for i in range(s)]
         self._dist = np.zeros((s, n))
         self._geomid = np.zeros((s, n), dtype=np.int32)
         self._gauss = np.zeros((s, n))
@@ -259,7 +258,8 @@ class ToFArray:
         self._counts = np.zeros(s, dtype=np.int64)
         self._noisy = p.noise_std_rel > 0.0 or p.dropout > 0.0
 
-        # numba backend: the ray-visible geoms, and the half-angle of the cone around the
+        # numba backend: the ray-visible geoms (geom groups are read here, once; alphas, sizes
+        # and poses every frame), and the half-angle of the cone around the
         # optical axis that holds every ray (the corner rays) for per-sensor culling.
         group = np.clip(model.geom_group, 0, len(self._geomgroup) - 1)
         self._cand = np.flatnonzero(self._geomgroup[group] != 0).astype(np.int64)
@@ -273,8 +273,7 @@ class ToFArray:
                 kind = mujoco.mjtGeom(int(model.geom_type[g])).name
                 raise ValueError(
                     f"the numba ToF backend casts only primitive geoms; geom {g} "
-                    f"({model.geom(g).name!r}, {kind}) is ray-visible: use backend='mujoco' "
-                    "or move the geom to the robot's geom group"
+                    f"({model.geom(g).name!r}, {kind}) is ray-visible: use backend='mujoco'"
                 )
 
         self._rng = np.random.default_rng(seed)
@@ -348,7 +347,9 @@ class ToFArray:
                     m,
                     data,
                     data.site_xpos[sid],
-                    self._vec_flat[i],
+                    self._vec[i].reshape(
+                        -1
+                    ),  # made per call: a stored view would part from _vec on pickling
                     self._geomgroup,
                     1,
                     -1,

@@ -9,6 +9,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import pickle
+import subprocess
+import sys
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -414,6 +419,16 @@ def test_copy_false_returns_views_that_the_next_frame_overwrites():
     assert not np.shares_memory(c.depth, tof.sense(data, copy=False).depth)
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_pickled_array_senses_the_same(backend):
+    model, data = build(add_world=add_box)
+    tof = ToFArray(model, ToFParams(backend=backend, noise_std_rel=0.01), seed=5)
+    clone = pickle.loads(pickle.dumps(tof))
+    a, b = tof.sense(data), clone.sense(data)
+    np.testing.assert_array_equal(a.depth, b.depth)
+    np.testing.assert_array_equal(a.points, b.points)
+
+
 # -- frame-rate gate ---------------------------------------------------------------------------
 
 
@@ -497,3 +512,17 @@ def test_missing_site_is_named():
     model, _ = build()
     with pytest.raises(ValueError, match="tof_9"):
         ToFArray(model, ToFParams(site_names=("tof_0", "tof_9")))
+
+
+# -- benchmark script --------------------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_bench_script_runs_end_to_end(tmp_path):
+    root = Path(__file__).resolve().parents[2]
+    out = tmp_path / "bench.md"
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    cmd = [sys.executable, str(root / "scripts" / "bench_tof.py"), "--frames", "1", "--out"]
+    subprocess.run([*cmd, str(out)], check=True, env=env, capture_output=True, timeout=300)
+    text = out.read_text()
+    assert "154,112" in text and "9,632" in text and "| numba |" in text
