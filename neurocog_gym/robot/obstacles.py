@@ -1,0 +1,180 @@
+"""The pool of wooden-block obstacles: mocap box bodies moved into place at run time.
+
+The scene (``assets/scene.xml``) holds ``N_SLOTS`` mocap bodies ``obstacle_0..``, each with one box
+geom in world geom group 1 (seen by the time-of-flight rays, colliding with the robot). A parked
+block sits below the floor, out of sight and out of reach. Placing a block rewrites its geom's
+half-sizes and bounding volumes in the ``MjModel`` and its mocap pose in the ``MjData``, so no
+model is rebuilt per episode. Mocap blocks do not move when pushed: a block the robot cannot
+pass stays in its way, as a heavy wooden block on a high-friction floor would.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+N_SLOTS = 6
+PARK_Z = -1.0
+#: The paper's wooden blocks are 6, 7 and 8 cm high (§6.4).
+PAPER_HEIGHTS = (0.06, 0.07, 0.08)
+
+
+@dataclass(frozen=True)
+class Block:
+    """One wooden block resting on the floor.
+
+    Attributes:
+        x, y: centre of its footprint, metres, world frame.
+        length: extent along world x before the yaw, metres.
+        width: extent along world y before the yaw, metres.
+        height: metres.
+        yaw: rotation about world z, radians.
+    """
+
+    x: float
+    y: float
+    length: float
+    width: float
+    height: float
+    yaw: float = 0.0
+
+    def __post_init__(self):
+        for name in ("length", "width", "height"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"Block.{name} must be a positive number, got {v}")
+
+    @property
+    def half_size(self) -> np.ndarray:
+        """(3,) half extents, metres."""
+        return np.array([self.length, self.width, self.height]) / 2.0
+
+    @property
+    def center(self) -> np.ndarray:
+        """(3,) centre, metres (the block rests on z = 0)."""
+        return np.array([self.x, self.y, self.height / 2.0])
+
+    def corners_xy(self) -> np.ndarray:
+        """(4, 2) footprint corners, metres."""
+        c, s = np.cos(self.yaw), np.sin(self.yaw)
+        hx, hy = self.length / 2, self.width / 2
+        local = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
+        return local @ np.array([[c, s], [-s, c]]) + np.array([self.x, self.y])
+
+    def aabb(self) -> np.ndarray:
+        """(2, 3) axis-aligned min/max corners, metres."""
+        xy = self.corners_xy()
+        return np.array(
+            [[*xy.min(axis=0), 0.0], [*xy.max(axis=0), self.height]], dtype=np.float64
+        )
+
+    def to_json(self) -> dict:
+        """JSON-ready dict (for trial logs)."""
+        return {k: float(getattr(self, k)) for k in ("x", "y", "length", "width", "height", "yaw")}
+
+
+class ObstaclePool:
+    """Places and parks the scene's obstacle blocks.
+
+    Args:
+        model: the compiled scene; must contain bodies ``obstacle_0 .. obstacle_{N-1}``.
+    """
+
+    def __init__(self, model: mujoco.MjModel):
+        self.bodies: list[int] = []
+        self.geoms: list[int] = []
+        self.mocap: list[int] = []
+        for i in range(N_SLOTS):
+            try:
+                body = model.body(f"obstacle_{i}").id
+            except KeyError:
+                break
+            self.bodies.append(body)
+            self.mocap.append(int(model.body_mocapid[body]))
+            self.geoms.append(int(np.flatnonzero(model.geom_bodyid == body)[0]))
+        if not self.bodies:
+            raise ValueError("the scene has no obstacle bodies (obstacle_0, ...)")
+        self.geom_ids = np.array(self.geoms)
+        self.blocks: list[Block] = []
+
+    @property
+    def capacity(self) -> int:
+        """Number of block slots in the scene."""
+        return len(self.bodies)
+
+    def clear(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Park every block below the floor."""
+        for slot in range(self.capacity):
+            data.mocap_pos[self.mocap[slot]] = (0.0, 3.0 * slot, PARK_Z)
+            data.mocap_quat[self.mocap[slot]] = (1.0, 0.0, 0.0, 0.0)
+        self.blocks = []
+
+    def place(self, model: mujoco.MjModel, data: mujoco.MjData, blocks: list[Block]) -> None:
+        """Park all blocks, then put ``blocks`` in place (in slot order)."""
+        if len(blocks) > self.capacity:
+            raise ValueError(f"at most {self.capacity} blocks fit the scene, got {len(blocks)}")
+        self.clear(model, data)
+        for slot, block in enumerate(blocks):
+            self._set(model, data, slot, block)
+        self.blocks = list(blocks)
+        mujoco.mj_kinematics(model, data)
+
+    def add(self, model: mujoco.MjModel, data: mujoco.MjData, block: Block) -> None:
+        """Put one more block in the next free slot (a sudden obstacle)."""
+        slot = len(self.blocks)
+        if slot >= self.capacity:
+            raise ValueError(f"all {self.capacity} obstacle slots are in use")
+        self._set(model, data, slot, block)
+        self.blocks.append(block)
+        mujoco.mj_kinematics(model, data)
+
+    def _set(self, model, data, slot: int, block: Block) -> None:
+        g = self.geoms[slot]
+        half = block.half_size
+        model.geom_size[g] = half
+        model.geom_rbound[g] = float(np.linalg.norm(half))
+        model.geom_aabb[g] = (0.0, 0.0, 0.0, *half)
+        data.mocap_pos[self.mocap[slot]] = block.center
+        data.mocap_quat[self.mocap[slot]] = (np.cos(block.yaw / 2), 0.0, 0.0, np.sin(block.yaw / 2))
+
+    def boxes(self) -> np.ndarray:
+        """(K, 2, 3) axis-aligned bounds of the placed blocks, metres."""
+        if not self.blocks:
+            return np.zeros((0, 2, 3))
+        return np.stack([b.aabb() for b in self.blocks])
+
+    def touching(self, data: mujoco.MjData, robot_geoms: np.ndarray) -> np.ndarray:
+        """(K,) bool: which placed blocks are in contact with a robot geom now."""
+        hit = np.zeros(len(self.blocks), dtype=bool)
+        if data.ncon == 0 or not self.blocks:
+            return hit
+        active = self.geom_ids[: len(self.blocks)]
+        g1 = data.contact.geom1[: data.ncon]
+        g2 = data.contact.geom2[: data.ncon]
+        robot = np.isin(g1, robot_geoms) | np.isin(g2, robot_geoms)
+        for k, g in enumerate(active):
+            hit[k] = bool(np.any(robot & ((g1 == g) | (g2 == g))))
+        return hit
+
+
+def random_block(
+    rng: np.random.Generator,
+    x: float,
+    y: float,
+    height_jitter: float = 0.005,
+    length_range: tuple[float, float] = (0.05, 0.12),
+    width_range: tuple[float, float] = (0.10, 0.30),
+    yaw_range: float = 0.3,
+) -> Block:
+    """A wooden block around one of the paper's heights (6, 7 or 8 cm), random size and yaw."""
+    h = float(rng.choice(PAPER_HEIGHTS)) + float(rng.uniform(-height_jitter, height_jitter))
+    return Block(
+        x=float(x),
+        y=float(y),
+        length=float(rng.uniform(*length_range)),
+        width=float(rng.uniform(*width_range)),
+        height=h,
+        yaw=float(rng.uniform(-yaw_range, yaw_range)),
+    )
