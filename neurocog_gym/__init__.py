@@ -3,6 +3,8 @@
 Importing the package registers every environment id (SPEC §9):
 
 * ``NeuroCog/Walk-v0`` — flat-ground trotting on the CPG.
+* ``NeuroCog/SuddenObstacle-v0`` — a block appears in a front leg's swing path (§6.5.1).
+* ``NeuroCog/StaticObstacle-v0`` — blocks lie across the path (§6.5.2).
 """
 
 from __future__ import annotations
@@ -18,6 +20,20 @@ from gymnasium.envs.registration import register  # noqa: E402
 __version__ = "0.1.0"
 __all__ = ["ENV_IDS", "__version__"]
 
-ENV_IDS: tuple[str, ...] = ("NeuroCog/Walk-v0",)
+ENV_IDS: tuple[str, ...] = (
+    "NeuroCog/Walk-v0",
+    "NeuroCog/SuddenObstacle-v0",
+    "NeuroCog/StaticObstacle-v0",
+)
 
 register(id="NeuroCog/Walk-v0", entry_point="neurocog_gym.envs.walk:WalkEnv", max_episode_steps=2000)
+register(
+    id="NeuroCog/SuddenObstacle-v0",
+    entry_point="neurocog_gym.envs.sudden:SuddenObstacleEnv",
+    max_episode_steps=700,
+)
+register(
+    id="NeuroCog/StaticObstacle-v0",
+    entry_point="neurocog_gym.envs.static:StaticObstacleEnv",
+    max_episode_steps=1000,
+)

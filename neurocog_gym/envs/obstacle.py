@@ -1,0 +1,253 @@
+"""ObstacleEnv: QuadrupedEnv plus the eyes, the attention loop, the effectivity and the outcome.
+
+Shared by ``NeuroCog/SuddenObstacle-v0`` and ``NeuroCog/StaticObstacle-v0``. Every control cycle:
+the physics steps; the four ToF sensors cast a frame when one is due (their frame rate); the
+attention pipeline runs one DD-GNG learning cycle on the latest frame and detects affordances;
+the effectivity predicts footholds and swing paths against the perceived obstacle boxes.
+
+Outcome of an episode (``info["outcome"]`` on its last step), from MuJoCo contacts and positions:
+
+* **touched**: at some control cycle, a MuJoCo contact joined a robot geom (geom group 2) and a
+  placed obstacle geom.
+* **passed**: every foot is beyond the far side of every placed obstacle: the smallest foot
+  position along world x exceeds the largest x of all obstacle boxes (by ``pass_margin``), with
+  the robot upright. Walking around an obstacle passes it too.
+* ``success`` = passed and never touched; ``touch`` = passed and touched; ``fail`` = the robot
+  fell, the physics became unstable, or it had not passed when the time limit ran out (stuck).
+The episode terminates when the robot passes (or falls); the time limit truncates it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import EzPickle
+
+from neurocog_gym.envs.base import QuadrupedEnv
+from neurocog_gym.locomotion.effectivity import Effectivity, EffectivityParams, EffectivityState
+from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
+from neurocog_gym.robot.obstacles import ObstaclePool
+from neurocog_gym.robot.tof import ToFArray, ToFParams
+
+N_OBJECTS = 4
+OBJECT_FIELDS = ("dx", "dy", "dz", "height", "width", "length", "gamma", "density")
+AEF_INPUTS = 31
+
+
+class ObstacleEnv(QuadrupedEnv):
+    """Base of the obstacle tasks (see ``SuddenObstacleEnv`` for the documented spaces)."""
+
+    def __init__(
+        self,
+        tof: ToFParams | None = None,
+        perception: PipelineParams | None = None,
+        effectivity: EffectivityParams | None = None,
+        include_graph: bool = False,
+        graph_max_nodes: int = 512,
+        graph_max_edges: int = 2048,
+        pass_margin: float = 0.02,
+        warmup_cycles: int = 150,
+        **kwargs,
+    ):
+        self.include_graph = bool(include_graph)
+        self.graph_max_nodes = int(graph_max_nodes)
+        self.graph_max_edges = int(graph_max_edges)
+        super().__init__(**kwargs)
+        # Pickle with every argument of the task (the base recorded only its own).
+        EzPickle.__init__(
+            self, tof=tof, perception=perception, effectivity=effectivity,
+            include_graph=include_graph, graph_max_nodes=graph_max_nodes,
+            graph_max_edges=graph_max_edges, pass_margin=pass_margin,
+            warmup_cycles=warmup_cycles, **kwargs,
+        )  # fmt: skip
+        self.tof = ToFArray(self.model, tof or ToFParams(backend="numba"))
+        self.pipeline = AttentionPipeline(seed=0, params=perception)
+        self.effectivity = Effectivity(effectivity)
+        self.pool = ObstaclePool(self.model)
+        self.pass_margin = float(pass_margin)
+        self.warmup_cycles = int(warmup_cycles)
+        self.observation_space = spaces.Dict(self._observation_spaces())
+        self.frame = None
+        self.eff: EffectivityState | None = None
+        self.touched = False
+        self.touch_events = 0
+        self._was_touching = False
+        self.passed = False
+        self.perception_time = 0.0
+
+    # -- spaces -------------------------------------------------------------------------------
+
+    def _observation_spaces(self) -> dict[str, spaces.Space]:
+        s = super()._observation_spaces()
+        f32 = np.float32
+        s["objects"] = spaces.Box(-np.inf, np.inf, (N_OBJECTS, len(OBJECT_FIELDS)), f32)
+        s["objects_mask"] = spaces.Box(0.0, 1.0, (N_OBJECTS,), f32)
+        s["aef_input"] = spaces.Box(-np.inf, np.inf, (AEF_INPUTS,), f32)
+        s["aef_mode"] = spaces.Discrete(3)
+        s["foothold"] = spaces.Box(-np.inf, np.inf, (4, 3), f32)
+        s["foothold_safe"] = spaces.MultiBinary(4)
+        if self.include_graph:
+            s["graph_nodes"] = spaces.Box(-np.inf, np.inf, (self.graph_max_nodes, 3), f32)
+            s["graph_edges"] = spaces.Box(-1, self.graph_max_nodes, (self.graph_max_edges, 2), np.int64)
+            s["graph_counts"] = spaces.Box(0, max(self.graph_max_nodes, self.graph_max_edges), (2,), np.int64)
+        return s
+
+    # -- world helpers --------------------------------------------------------------------------
+
+    def _yaw(self) -> float:
+        w, x, y, z = self.data.qpos[3:7]
+        return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+
+    def _feet(self) -> np.ndarray:
+        return self.data.site_xpos[self.robot.foot_site]
+
+    def _sense_and_perceive(self, force_frame: bool = False) -> None:
+        frame = self.tof.sense(self.data) if force_frame else self.tof.maybe_sense(self.data)
+        if frame is not None:
+            self.frame = frame
+        if self.frame is None:
+            return
+        yaw = self._yaw()
+        forward = (np.cos(yaw), np.sin(yaw), 0.0)
+        self.pipeline.step(self.frame.points, self.frame.origins.mean(axis=0), self.data.time, forward)
+        self.perception_time += self.pipeline.timings["total"]
+
+    def _update_effectivity(self) -> None:
+        d = self.data
+        self.eff = self.effectivity.step(
+            d.time, self.touch(), self._feet().copy(), d.xpos[self.robot.hip_body].copy(),
+            self._yaw(), d.qvel[0:3].copy(), self.pipeline.attention_boxes,
+        )  # fmt: skip
+
+    # -- episode --------------------------------------------------------------------------------
+
+    def _reset_task(self) -> None:
+        self.pool.clear(self.model, self.data)
+        self.tof.reset(seed=int(self.np_random.integers(2**31)))
+        self.pipeline.reset(seed=int(self.np_random.integers(2**31)))
+        self.effectivity.reset()
+        self.touched = False
+        self.touch_events = 0
+        self._was_touching = False
+        self.passed = False
+        self.perception_time = 0.0
+        self.frame = None
+        self._place_initial_obstacles()
+        import mujoco
+
+        mujoco.mj_forward(self.model, self.data)
+        # The robot has looked at the scene before the trial starts: warm the map up.
+        self._sense_and_perceive(force_frame=True)
+        for _ in range(self.warmup_cycles):
+            self.pipeline.step(self.frame.points, self.frame.origins.mean(axis=0), 0.0)
+        self.tof.reset(seed=int(self.np_random.integers(2**31)))
+        self._update_effectivity()
+
+    def _place_initial_obstacles(self) -> None:
+        """Tasks place their obstacles here."""
+
+    def _after_physics(self) -> None:
+        self._task_event()
+        self._sense_and_perceive()
+        self._update_effectivity()
+        touching = bool(self.pool.touching(self.data, self.robot.robot_geoms).any())
+        if touching and not self._was_touching:
+            self.touch_events += 1
+        self._was_touching = touching
+        self.touched |= touching
+        if self.pool.blocks:
+            far = float(self.pool.boxes()[:, 1, 0].max())
+            self.passed = bool(self._feet()[:, 0].min() > far + self.pass_margin)
+
+    def _task_event(self) -> None:
+        """Tasks add sudden obstacles here (runs right after the physics step)."""
+
+    def _fell(self) -> bool:
+        return super()._fell()
+
+    def step(self, action):
+        """One control cycle; terminates when the robot passes the obstacles or falls."""
+        obs, reward, terminated, truncated, info = super().step(action)
+        if info.get("sim_unstable"):
+            info.update(self._outcome(fell=False, unstable=True))
+            return obs, reward, terminated, truncated, info
+        if self.passed and not terminated:
+            terminated = True
+        info.update(self._outcome(fell=info["fell"], unstable=False))
+        return obs, reward, terminated, truncated, info
+
+    def _outcome(self, fell: bool, unstable: bool) -> dict:
+        if unstable or fell:
+            outcome = "fail"
+        elif self.passed:
+            outcome = "touch" if self.touched else "success"
+        else:
+            outcome = "fail"  # provisional: not passed (yet); final when the episode ends
+        return {
+            "outcome": outcome,
+            "passed": self.passed,
+            "touched": self.touched,
+            "touch_events": self.touch_events,
+            "fell": fell,
+            "obstacles": [b.to_json() for b in self.pool.blocks],
+            "perception_ms": 1e3 * self.pipeline.timings["total"],
+            "aef_mode": int(self.eff.mode) if self.eff is not None else 0,
+        }
+
+    # -- observation ----------------------------------------------------------------------------
+
+    def _objects(self) -> tuple[np.ndarray, np.ndarray, tuple]:
+        out = np.zeros((N_OBJECTS, len(OBJECT_FIELDS)), np.float32)
+        mask = np.zeros(N_OBJECTS, np.float32)
+        aff = self.pipeline.last
+        best = (0.0, 0.0, 0.0)
+        if aff is None:
+            return out, mask, best
+        torso = self.data.xpos[self.robot.torso_body]
+        yaw = self._yaw()
+        c, s = np.cos(yaw), np.sin(yaw)
+        objs = [o for o in aff.obstacles if o.height >= self.pipeline.params.min_height]
+        rel = [np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]]) @ (o.position - torso) for o in objs]
+        order = np.argsort([np.hypot(r[0], r[1]) + (10 if r[0] < 0 else 0) for r in rel])
+        for slot, k in enumerate(order[:N_OBJECTS]):
+            o = objs[k]
+            out[slot] = (*rel[k], o.height, o.width, o.length, o.gamma, o.density)
+            mask[slot] = 1.0
+        if len(order):
+            o = objs[order[0]]
+            best = (o.height, o.width, o.length)
+        return out, mask, best
+
+    def _get_obs(self) -> dict[str, np.ndarray]:
+        obs = self._proprioception()
+        objects, mask, (a_h, a_w, a_s) = self._objects()
+        eff = self.eff
+        yaw = self._yaw()
+        c, s = np.cos(yaw), np.sin(yaw)
+        torso = self.data.xpos[self.robot.torso_body]
+        if eff is None:
+            direction = np.zeros((4, 3))
+            foothold = np.zeros((4, 3))
+            safe = np.ones(4, np.int8)
+            mode = 0
+        else:
+            direction = eff.direction
+            rot = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+            foothold = (eff.foothold - torso) @ rot.T
+            safe = (eff.foothold_safe & eff.path_safe).astype(np.int8)
+            mode = int(eff.mode)
+        aef = np.concatenate([[a_h, a_w, a_s], direction.ravel(), obs["joint_pos"], obs["touch"]])
+        obs.update(
+            objects=objects,
+            objects_mask=mask,
+            aef_input=aef.astype(np.float32),
+            aef_mode=mode,
+            foothold=foothold.astype(np.float32),
+            foothold_safe=safe,
+        )
+        if self.include_graph:
+            g = self.pipeline.net.padded(self.graph_max_nodes, self.graph_max_edges)
+            obs["graph_nodes"] = g.nodes.astype(np.float32)
+            obs["graph_edges"] = g.edges.astype(np.int64)
+            obs["graph_counts"] = np.array([g.n_nodes, g.n_edges], np.int64)
+        return obs

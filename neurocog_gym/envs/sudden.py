@@ -1,0 +1,132 @@
+"""NeuroCog/SuddenObstacle-v0: a wooden block appears in a front leg's swing path (§6.5.1)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from neurocog_gym.envs.obstacle import ObstacleEnv
+from neurocog_gym.robot.names import FRONT_LEGS
+from neurocog_gym.robot.obstacles import Block, random_block
+
+
+class SuddenObstacleEnv(ObstacleEnv):
+    """The robot trots; at the start of a front leg's swing an obstacle appears in front of it.
+
+    §6.5.1: "During the swinging phase (front leg lifted), some pieces of wood are moved and
+    placed by hand immediately in front of the robot", at random positions and arrangements.
+    Here, after a random ``appear_after`` time (uniform in ``appear_window``), at the next
+    lift-off of a front leg, one block (or, with probability ``pair_probability``, two blocks side
+    by side) is placed across that leg's swing path: the block's near face lies between the foot
+    and its predicted foothold, so an unchanged swing runs into it or lands on it. Heights are the
+    paper's 6, 7, 8 cm with ±5 mm jitter; lengths 5-12 cm along the path, widths 10-30 cm.
+
+    ## Action space, observation space
+
+    As ``NeuroCog/Walk-v0`` (15-value AEF output layer), plus these observation keys:
+
+    | key | shape | meaning |
+    |---|---|---|
+    | objects | (4, 8) | the 4 nearest perceived objects ahead: offset from the torso in its yaw frame (3), height, width, length, gamma, density |
+    | objects_mask | (4,) | 1 for a valid row |
+    | aef_input | (31,) | the AEF's inputs (Fig. 7): A_h, A_w, A_s, 4 x 3 interrupt directions, 12 joint angles, 4 touch |
+    | aef_mode | () | 0 nothing to do, 1 a swing must change (interrupt group), 2 walk around (provision group) |
+    | foothold | (4, 3) | predicted footholds relative to the torso, yaw frame, m |
+    | foothold_safe | (4,) | 1 if that foothold and swing path are clear of perceived obstacles |
+    | graph_nodes, graph_edges, graph_counts | padded | the DD-GNG graph (``include_graph=True`` only) |
+
+    ## Rewards
+
+    As ``NeuroCog/Walk-v0``, plus ``reward_touch`` = -1 on each new contact with an obstacle and
+    ``reward_pass`` = +10 when the robot passes.
+
+    ## Episode end and outcome
+
+    Terminates when every foot is past the obstacles (``info["outcome"]`` success or touch) or
+    the robot falls (fail); truncated at 700 steps (7 s) by the registration — not passed is a
+    fail. See ``ObstacleEnv`` for the exact definitions of passed and touched.
+
+    ## Arguments
+
+    As ``WalkEnv``, plus ``appear_window`` (s, default (1.0, 2.0)), ``pair_probability`` (0.3),
+    ``tof`` (``ToFParams``), ``perception`` (``PipelineParams``: ``gng="gng"`` switches the
+    attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``.
+    """
+
+    def __init__(
+        self,
+        appear_window: tuple[float, float] = (1.0, 2.0),
+        pair_probability: float = 0.3,
+        **kwargs,
+    ):
+        lo, hi = appear_window
+        if not (0.0 <= lo <= hi):
+            raise ValueError(f"appear_window must be (lo, hi) with 0 <= lo <= hi, got {appear_window}")
+        if not 0.0 <= pair_probability <= 1.0:
+            raise ValueError(f"pair_probability must be in [0, 1], got {pair_probability}")
+        self.appear_window = (float(lo), float(hi))
+        self.pair_probability = float(pair_probability)
+        super().__init__(**kwargs)
+        from gymnasium.utils import EzPickle
+
+        EzPickle.__init__(
+            self, appear_window=appear_window, pair_probability=pair_probability,
+            **self._ezpickle_kwargs,
+        )  # fmt: skip
+
+    def _place_initial_obstacles(self) -> None:
+        self.appear_after = float(self.np_random.uniform(*self.appear_window))
+        self.appeared_at = None
+        self.appear_leg = -1
+        self._front_down = np.ones(2, dtype=bool)
+
+    def _task_event(self) -> None:
+        touch = self.touch()
+        down = touch[list(FRONT_LEGS)] > self.effectivity.p.touch_off
+        lifted = self._front_down & ~down
+        self._front_down = down
+        if self.appeared_at is not None or self.data.time < self.appear_after or not lifted.any():
+            return
+        leg = FRONT_LEGS[int(np.flatnonzero(lifted)[0])]
+        rng = self.np_random
+        p = self.effectivity.p
+        yaw = self._yaw()
+        heading = np.array([np.cos(yaw), np.sin(yaw)])
+        hip = self.data.xpos[self.robot.hip_body[leg], :2]
+        foot = self._feet()[leg, :2]
+        v = self.data.qvel[0:2]
+        foothold = hip + p.reach * heading + v * p.swing_time
+        block = random_block(rng, 0.0, 0.0, yaw_range=0.25)
+        # Near face between the foot and the foothold: the swing meets the block.
+        span = float((foothold - foot) @ heading)
+        near = float(rng.uniform(0.45, 0.85)) * max(span, 0.05)
+        centre = foot + (near + block.length / 2) * heading
+        centre += float(rng.uniform(-0.03, 0.03)) * np.array([-heading[1], heading[0]])
+        blocks = [Block(centre[0], centre[1], block.length, block.width, block.height, yaw + block.yaw)]
+        if rng.random() < self.pair_probability:
+            side = 1.0 if rng.random() < 0.5 else -1.0
+            other = random_block(rng, 0.0, 0.0, yaw_range=0.25)
+            offset = side * (block.width + other.width) / 2 * np.array([-heading[1], heading[0]])
+            c2 = centre + offset + float(rng.uniform(-0.03, 0.03)) * heading
+            blocks.append(Block(c2[0], c2[1], other.length, other.width, other.height, yaw + other.yaw))
+        for b in blocks:
+            self.pool.add(self.model, self.data, b)
+        self.appeared_at = float(self.data.time)
+        self.appear_leg = int(leg)
+
+    def _outcome(self, fell: bool, unstable: bool) -> dict:
+        out = super()._outcome(fell, unstable)
+        out["appeared_at"] = self.appeared_at
+        out["appear_leg"] = self.appear_leg
+        return out
+
+    def _reward(self, x_vel: float, power: float) -> tuple[float, dict]:
+        r, terms = super()._reward(x_vel, power)
+        touch = -1.0 if (self._was_touching and self.touch_events and self._new_touch()) else 0.0
+        passed = 10.0 if self.passed else 0.0
+        terms.update(reward_touch=touch, reward_pass=passed)
+        return r + touch + passed, terms
+
+    def _new_touch(self) -> bool:
+        new = self.touch_events != getattr(self, "_touch_events_rewarded", 0)
+        self._touch_events_rewarded = self.touch_events
+        return new

@@ -1,0 +1,230 @@
+"""Effectivity (§4.2.3, §5.2): what each leg is about to do, and whether the terrain affords it.
+
+Two effectivities are used, as the paper names them: the prediction of each swinging leg's next
+foothold and the inertial path of its swing. Both are predicted from the leg's state and the body
+motion; both are checked against the obstacle boxes the perception reports (never against the
+simulator's ground truth).
+
+Per control cycle, for each leg:
+
+* **Swing state.** A leg swings from lift-off (its touch sensor reads less than ``touch_off``)
+  until touch-down. ``t_swing`` is the time since lift-off.
+* **Foothold.** ``hip + R_yaw (reach, 0) + v_body * t_left``, with ``t_left = max(T_swing -
+  t_swing, t_min)``: the foot lands ``reach`` ahead of its hip after the rest of a nominal swing
+  of the body moving at its current velocity (a stance leg's foothold is where it stands).
+* **Swing path.** ``n_path`` points from the foot to the foothold along an arc with apex
+  ``clearance`` above the straight line (the nominal swing).
+* **Safety.** A foothold is unsafe when it lies in an obstacle box grown by ``margin``; a swing
+  path is unsafe when any of its points (as a sphere of the foot's radius) enters such a box.
+* **Interrupt direction** (the AEF's 3-D input per leg) when a swinging leg's path or foothold is
+  unsafe: "up and over" — forward and up with a lift speed that grows with the obstacle's height
+  — unless the foothold would land on a box too long to clear, in which case "short" — back and
+  up, to the nearest safe foothold before it.
+* **Walking provision** when no swing conflicts but an obstacle lies in the corridor ahead within
+  ``lookahead``: side-step away from it (s_COR towards the side with more room), and slow down
+  while it is close (Fig. 20b: "moved left to avoid an obstacle further ahead").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from neurocog_gym.robot.names import FRONT_LEGS
+
+MODE_NONE = 0
+MODE_INTERRUPT = 1
+MODE_PROVISION = 2
+
+
+@dataclass(frozen=True)
+class EffectivityParams:
+    """Effectivity geometry (our reading of §4.2.3; lengths in metres, times in seconds)."""
+
+    reach: float = 0.06
+    """Foothold ahead of the hip at touch-down, along the heading, m (measured on the gait)."""
+    swing_time: float = 0.22
+    """Nominal swing duration T_swing, s (measured on the gait)."""
+    min_time_left: float = 0.03
+    """Shortest predicted remaining swing, s."""
+    clearance: float = 0.035
+    """Nominal swing apex above the straight foot path, m (below the 6-8 cm blocks)."""
+    foot_radius: float = 0.018
+    """Sole sphere radius, m (assets/quadruped.xml)."""
+    margin: float = 0.02
+    """Safety margin around obstacle boxes, m."""
+    n_path: int = 8
+    """Points sampled along the predicted swing path."""
+    touch_off: float = 0.05
+    """Touch input below which a foot is in the air (1 = a quarter of the body weight)."""
+    lift_speed: float = 0.8
+    """Foot speed of an "up and over" interrupt for a 7 cm block, m/s (scaled by height)."""
+    max_step_length: float = 0.16
+    """Longest block (along the path) a swing can clear, m."""
+    lookahead: float = 1.2
+    """Obstacles ahead closer than this change the walking provision, m."""
+    near: float = 0.2
+    """Obstacles ahead closer than this are left to the swing interrupts, m."""
+    corridor: float = 0.16
+    """Half-width of the robot's path corridor (body half-width plus margin), m."""
+
+
+@dataclass
+class EffectivityState:
+    """Per-cycle effectivity output (all world frame unless noted)."""
+
+    swinging: np.ndarray
+    """(4,) bool."""
+    foothold: np.ndarray
+    """(4, 3) predicted footholds, m."""
+    foothold_safe: np.ndarray
+    """(4,) bool."""
+    path_safe: np.ndarray
+    """(4,) bool."""
+    direction: np.ndarray
+    """(4, 3) interrupt direction per leg in the torso's yaw frame (x ahead, y left, z up), m/s."""
+    mode: int
+    """MODE_NONE, MODE_INTERRUPT or MODE_PROVISION."""
+    provision: np.ndarray
+    """(3,) geometric teacher's walking provision (s_SAG, s_COR, s_DIR)."""
+    target: int
+    """Index of the most relevant obstacle box, or -1."""
+
+
+class Effectivity:
+    """Foothold and swing-path prediction and the AEF's interrupt directions (§4.2.3, §5.2)."""
+
+    def __init__(self, params: EffectivityParams | None = None):
+        self.p = params or EffectivityParams()
+        self.lift_time = np.zeros(4)
+        self.was_down = np.ones(4, dtype=bool)
+
+    def reset(self) -> None:
+        """Forget swing timing."""
+        self.lift_time[:] = 0.0
+        self.was_down[:] = True
+
+    def step(
+        self,
+        t: float,
+        touch: np.ndarray,
+        foot: np.ndarray,
+        hip: np.ndarray,
+        yaw: float,
+        v_body: np.ndarray,
+        boxes: np.ndarray,
+    ) -> EffectivityState:
+        """Predict footholds and swing paths and check them against ``boxes``.
+
+        Args:
+            t: time, s.
+            touch: (4,) normalised touch inputs.
+            foot: (4, 3) foot positions, m.
+            hip: (4, 3) hip positions, m.
+            yaw: torso heading, rad.
+            v_body: (3,) torso linear velocity, m/s (world).
+            boxes: (K, 2, 3) obstacle boxes (min/max corners), m.
+        """
+        p = self.p
+        down = touch > p.touch_off
+        lifted = self.was_down & ~down
+        self.lift_time[lifted] = t
+        self.was_down = down.copy()
+        swinging = ~down
+        heading = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+        left = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+        t_left = np.maximum(p.swing_time - (t - self.lift_time), p.min_time_left)
+        v = np.array([v_body[0], v_body[1], 0.0])
+        foothold = foot.copy()
+        for leg in range(4):
+            if swinging[leg]:
+                foothold[leg] = hip[leg] + p.reach * heading + v * t_left[leg]
+                foothold[leg, 2] = 0.0
+        grown = boxes.copy() if len(boxes) else np.zeros((0, 2, 3))
+        if len(grown):
+            grown[:, 0] -= p.margin
+            grown[:, 1] += p.margin
+        foothold_safe = np.ones(4, dtype=bool)
+        path_safe = np.ones(4, dtype=bool)
+        hit_box = -np.ones(4, dtype=int)
+        s = np.linspace(0.0, 1.0, p.n_path)
+        for leg in range(4):
+            if len(grown) == 0:
+                break
+            fh = foothold[leg]
+            inside = np.all((fh[:2] >= grown[:, 0, :2]) & (fh[:2] <= grown[:, 1, :2]), axis=1)
+            if inside.any():
+                foothold_safe[leg] = False
+                hit_box[leg] = int(np.flatnonzero(inside)[0])
+            if swinging[leg]:
+                path = (1 - s)[:, None] * foot[leg] + s[:, None] * fh
+                path[:, 2] += 4 * p.clearance * s * (1 - s)
+                lo = grown[None, :, 0] - p.foot_radius
+                hi = grown[None, :, 1] + p.foot_radius
+                inb = np.all((path[:, None] >= lo) & (path[:, None] <= hi), axis=2)
+                if inb.any():
+                    path_safe[leg] = False
+                    if hit_box[leg] < 0:
+                        hit_box[leg] = int(np.flatnonzero(inb.any(axis=0))[0])
+        direction = np.zeros((4, 3))
+        conflict = swinging & ~(foothold_safe & path_safe)
+        mode = MODE_NONE
+        target = -1
+        provision = np.zeros(3)
+        if conflict.any():
+            mode = MODE_INTERRUPT
+            for leg in np.flatnonzero(conflict):
+                box = boxes[hit_box[leg]]
+                target = int(hit_box[leg])
+                height = box[1, 2]
+                along = float(np.ptp(box[:, :2] @ heading[:2]))
+                speed = p.lift_speed * max(height, 0.03) / 0.07
+                if along > p.max_step_length and not foothold_safe[leg]:
+                    direction[leg] = speed * np.array([-0.5, 0.0, 1.0])
+                else:
+                    direction[leg] = speed * np.array([0.6, 0.0, 1.0])
+        elif len(boxes):
+            target, provision = self._provision(hip, heading, left, boxes)
+            if target >= 0:
+                mode = MODE_PROVISION
+                direction[:] = np.array([provision[0], provision[1], 0.0])
+        return EffectivityState(
+            swinging=swinging,
+            foothold=foothold,
+            foothold_safe=foothold_safe,
+            path_safe=path_safe,
+            direction=direction,
+            mode=mode,
+            provision=provision,
+            target=target,
+        )
+
+    def _provision(self, hip, heading, left, boxes) -> tuple[int, np.ndarray]:
+        p = self.p
+        front = hip[list(FRONT_LEGS)].mean(axis=0)
+        best, best_d = -1, np.inf
+        lateral_best = 0.0
+        for k, box in enumerate(boxes):
+            corners = np.array([[box[i, 0], box[j, 1]] for i in (0, 1) for j in (0, 1)])
+            rel = corners - front[:2]
+            ahead = rel @ heading[:2]
+            side = rel @ left[:2]
+            if ahead.max() < 0 or ahead.min() > p.lookahead:
+                continue
+            # The box blocks the corridor if its lateral extent overlaps [-corridor, corridor].
+            if side.min() > p.corridor or side.max() < -p.corridor:
+                continue
+            d = max(ahead.min(), 0.0)
+            if d < p.near:
+                continue
+            if d < best_d:
+                best, best_d = k, d
+                # Move to the side that needs the shorter side step.
+                go_left = abs(side.min() - p.corridor) > abs(side.max() + p.corridor)
+                need = (side.max() + p.corridor) if go_left else (p.corridor - side.min())
+                lateral_best = (1.0 if go_left else -1.0) * min(1.0, 0.4 + 2.5 * need)
+        if best < 0:
+            return -1, np.zeros(3)
+        slow = -0.3 if best_d < 0.6 else 0.0
+        return best, np.array([slow, lateral_best, 0.0])
