@@ -1,0 +1,104 @@
+"""Policies over the obstacle envs' observations: each is a callable ``policy(obs) -> action``.
+
+* :class:`AEFPolicy` — the paper's controller: the Affordance–Effectivity Fit network (shipped
+  weights, NumPy forward pass) applied to the env's 31 AEF inputs. When the effectivity reports a
+  swing that must change (``aef_mode == 1``) the interrupt group drives the joints of the legs it
+  named; when an object lies ahead but not in a swing (``aef_mode == 2``) the provision group
+  changes the walk; otherwise the CPG walks alone (zero action).
+* :class:`BlindPolicy` — never interrupts (the paper's "improved process disabled", Fig. 16b).
+* :class:`SB3Policy` — a saved stable-baselines3 model.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from neurocog_gym import paths
+from neurocog_gym.locomotion.aef import AEFWeights
+from neurocog_gym.locomotion.effectivity import MODE_INTERRUPT, MODE_PROVISION
+
+ACTION_DIM = 15
+
+
+class BlindPolicy:
+    """Never interrupts and never changes the walking provision: plain CPG walking."""
+
+    name = "blind"
+
+    def __call__(self, obs) -> np.ndarray:
+        """Return the all-zero action."""
+        return np.zeros(ACTION_DIM, dtype=np.float32)
+
+
+class AEFPolicy:
+    """The AEF network with the shipped (or given) weights.
+
+    Args:
+        weights: path of an ``.npz`` written by ``neurocog train-aef``; None uses
+            ``assets/aef_weights.npz``.
+        interrupt_gain: scales the interrupt group's output before clipping to [-1, 1].
+    """
+
+    name = "aef"
+
+    def __init__(self, weights: str | os.PathLike | None = None, interrupt_gain: float = 1.0):
+        path = Path(weights) if weights is not None else paths.asset(paths.AEF_WEIGHTS)
+        self.weights = AEFWeights.load(path)
+        self.interrupt_gain = float(interrupt_gain)
+
+    def __call__(self, obs) -> np.ndarray:
+        """Map one observation of an obstacle env to the 15-value action."""
+        action = np.zeros(ACTION_DIM, dtype=np.float32)
+        mode = int(np.asarray(obs["aef_mode"]))
+        if mode == 0:
+            return action
+        x = np.asarray(obs["aef_input"], dtype=np.float64)
+        interrupt, provision = self.weights.forward(x)
+        if mode == MODE_INTERRUPT:
+            legs = np.abs(x[3:15].reshape(4, 3)).sum(axis=1) > 0
+            mask = np.repeat(legs, 3)
+            action[:12] = np.clip(self.interrupt_gain * interrupt * mask, -1.0, 1.0)
+        elif mode == MODE_PROVISION:
+            action[12:] = provision
+        return action
+
+
+class SB3Policy:
+    """A saved stable-baselines3 model (``.zip``), deterministic actions."""
+
+    name = "sb3"
+
+    def __init__(self, path: str | os.PathLike):
+        path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(f"model file {path} does not exist")
+        self.model = _load_sb3(path)
+
+    def __call__(self, obs) -> np.ndarray:
+        """Deterministic action of the model."""
+        action, _ = self.model.predict(obs, deterministic=True)
+        return np.asarray(action, dtype=np.float32)
+
+
+def _load_sb3(path: Path):
+    import stable_baselines3 as sb3
+
+    errors = []
+    for algo in (sb3.PPO, sb3.SAC, sb3.TD3, sb3.A2C, sb3.DDPG):
+        try:
+            return algo.load(path, device="cpu")
+        except Exception as e:  # the zip names another algorithm
+            errors.append(f"{algo.__name__}: {e}")
+    raise ValueError(f"{path} is not a stable-baselines3 model ({errors[0]})")
+
+
+def make_policy(spec: str):
+    """``"aef"``, ``"blind"`` or the path of a saved stable-baselines3 model."""
+    if spec == "aef":
+        return AEFPolicy()
+    if spec == "blind":
+        return BlindPolicy()
+    return SB3Policy(spec)
