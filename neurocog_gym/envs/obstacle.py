@@ -5,6 +5,9 @@ the physics steps; the four ToF sensors cast a frame when one is due (their fram
 attention pipeline runs one DD-GNG learning cycle on the latest frame and detects affordances;
 the effectivity predicts footholds and swing paths against the perceived obstacle boxes.
 
+Wall-clock perception timings are not in ``info`` (it must be deterministic for a seed); read
+``env.unwrapped.pipeline.timings`` (last step) and ``env.unwrapped.perception_time`` (episode).
+
 Outcome of an episode (``info["outcome"]`` on its last step), from MuJoCo contacts and positions:
 
 * **touched**: at some control cycle, a MuJoCo contact joined a robot geom (geom group 2) and a
@@ -131,6 +134,7 @@ class ObstacleEnv(QuadrupedEnv):
         self._was_touching = False
         self.passed = False
         self.perception_time = 0.0
+        self._touch_events_rewarded = 0
         self.frame = None
         self._place_initial_obstacles()
         import mujoco
@@ -190,7 +194,6 @@ class ObstacleEnv(QuadrupedEnv):
             "touch_events": self.touch_events,
             "fell": fell,
             "obstacles": [b.to_json() for b in self.pool.blocks],
-            "perception_ms": 1e3 * self.pipeline.timings["total"],
             "aef_mode": int(self.eff.mode) if self.eff is not None else 0,
         }
 

@@ -1,0 +1,121 @@
+import gymnasium as gym
+import mujoco
+import numpy as np
+import pytest
+
+import neurocog_gym  # noqa: F401
+from neurocog_gym.perception.pipeline import PipelineParams
+from neurocog_gym.robot.obstacles import Block
+
+SUDDEN = "NeuroCog/SuddenObstacle-v0"
+STATIC = "NeuroCog/StaticObstacle-v0"
+
+
+def _walk_until(env, cond, max_steps=700):
+    obs = None
+    for _ in range(max_steps):
+        obs, r, term, trunc, info = env.step(np.zeros(15, np.float32))
+        if cond(info) or term or trunc:
+            return obs, info, term, trunc
+    return obs, info, term, trunc
+
+
+def test_sudden_obstacle_appears_in_the_swing_path_of_a_front_leg():
+    env = gym.make(SUDDEN)
+    for seed in range(3):
+        env.reset(seed=seed)
+        u = env.unwrapped
+        _walk_until(env, lambda i: u.appeared_at is not None)
+        assert u.appeared_at is not None and 1.0 <= u.appeared_at <= 2.5
+        leg = u.appear_leg
+        assert leg in (0, 1)
+        # At appearance the leg had just lifted off; its foot is behind the block's near face
+        # and the block lies ahead of it within one stride.
+        foot = u.data.site_xpos[u.robot.foot_site[leg]]
+        box = u.pool.boxes()[0]
+        assert box[0, 0] > foot[0] - 0.02
+        assert box[0, 0] < foot[0] + 0.25
+        assert box[0, 1] - 0.05 < foot[1] < box[1, 1] + 0.05
+        assert 0.055 <= box[1, 2] <= 0.085
+
+
+def test_static_obstacles_lie_ahead_across_the_path():
+    env = gym.make(STATIC)
+    env.reset(seed=0)
+    boxes = env.unwrapped.pool.boxes()
+    assert 1 <= len(boxes) <= 3
+    assert np.all(boxes[:, 0, 0] > 0.8)
+    assert np.all(np.abs(boxes[:, :, 1].mean(axis=1)) < 0.2)
+
+
+def test_outcome_touch_then_pass():
+    env = gym.make(STATIC, n_blocks=(1, 1))
+    env.reset(seed=0)
+    u = env.unwrapped
+    # Stage it: a low block right under the front-left foot's path, then teleport past it.
+    foot = u.data.site_xpos[u.robot.foot_site[0]].copy()
+    u.pool.place(u.model, u.data, [Block(foot[0] + 0.06, foot[1], 0.06, 0.06, 0.06)])
+    obs, info, term, trunc = _walk_until(env, lambda i: i["touched"], 200)
+    assert info["touched"] and info["touch_events"] >= 1
+    u.data.qpos[0] += 1.0
+    mujoco.mj_forward(u.model, u.data)
+    obs, r, term, trunc, info = env.step(np.zeros(15, np.float32))
+    assert info["passed"] and term
+    assert info["outcome"] == "touch"
+
+
+def test_outcome_success_when_passed_without_contact():
+    env = gym.make(STATIC, n_blocks=(1, 1))
+    env.reset(seed=0)
+    u = env.unwrapped
+    u.data.qpos[0] = u.pool.boxes()[0, 1, 0] + 0.5  # already past, never touched
+    mujoco.mj_forward(u.model, u.data)
+    _, _, term, _, info = env.step(np.zeros(15, np.float32))
+    assert term and info["outcome"] == "success" and not info["touched"]
+
+
+def test_outcome_fail_on_fall():
+    env = gym.make(STATIC)
+    env.reset(seed=0)
+    u = env.unwrapped
+    u.data.qpos[3:7] = (0.0, 1.0, 0.0, 0.0)  # upside down
+    mujoco.mj_forward(u.model, u.data)
+    _, _, term, _, info = env.step(np.zeros(15, np.float32))
+    assert term and info["fell"] and info["outcome"] == "fail"
+
+
+def test_timeout_is_a_fail():
+    env = gym.make(STATIC, max_episode_steps=20)
+    env.reset(seed=0)
+    info = {}
+    for _ in range(20):
+        *_, term, trunc, info = env.step(np.zeros(15, np.float32))
+    assert trunc and info["outcome"] == "fail" and not info["passed"]
+
+
+def test_attention_off_uses_plain_gng():
+    env = gym.make(SUDDEN, perception=PipelineParams(gng="gng"))
+    env.reset(seed=0)
+    assert type(env.unwrapped.pipeline.net).__name__ == "GNG"
+
+
+def test_graph_in_observation_behind_a_flag():
+    env = gym.make(SUDDEN, include_graph=True, graph_max_nodes=256, graph_max_edges=1024)
+    obs, _ = env.reset(seed=0)
+    n, m = obs["graph_counts"]
+    assert 0 < n <= 256 and obs["graph_nodes"].shape == (256, 3)
+    assert np.all(obs["graph_edges"][:m] < n) and np.all(obs["graph_edges"][m:] == -1)
+    assert "graph_nodes" not in gym.make(SUDDEN).reset(seed=0)[0]
+
+
+def test_perception_sees_a_placed_block():
+    env = gym.make(STATIC, n_blocks=(1, 1), first_distance=(0.25, 0.3))
+    env.reset(seed=1)
+    u = env.unwrapped
+    for _ in range(30):
+        env.step(np.zeros(15, np.float32))
+    box = u.pool.boxes()[0]
+    pts = u.frame.points
+    inside = np.all((pts >= box[0] - 0.01) & (pts <= box[1] + 0.01), axis=1)
+    assert inside.sum() > 20
+    assert pts[inside, 2].max() == pytest.approx(box[1, 2], abs=0.01)
