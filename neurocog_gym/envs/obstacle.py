@@ -46,6 +46,7 @@ class ObstacleEnv(QuadrupedEnv):
         perception: PipelineParams | None = None,
         effectivity: EffectivityParams | None = None,
         include_graph: bool = False,
+        draw_overlay: bool = True,
         graph_max_nodes: int = 512,
         graph_max_edges: int = 2048,
         pass_margin: float = 0.02,
@@ -55,11 +56,14 @@ class ObstacleEnv(QuadrupedEnv):
         self.include_graph = bool(include_graph)
         self.graph_max_nodes = int(graph_max_nodes)
         self.graph_max_edges = int(graph_max_edges)
+        self.draw_overlay = bool(draw_overlay)
+        kwargs.setdefault("max_geom", 6000)
         super().__init__(**kwargs)
         # Pickle with every argument of the task (the base recorded only its own).
         EzPickle.__init__(
             self, tof=tof, perception=perception, effectivity=effectivity,
-            include_graph=include_graph, graph_max_nodes=graph_max_nodes,
+            include_graph=include_graph, draw_overlay=draw_overlay,
+            graph_max_nodes=graph_max_nodes,
             graph_max_edges=graph_max_edges, pass_margin=pass_margin,
             warmup_cycles=warmup_cycles, **kwargs,
         )  # fmt: skip
@@ -254,3 +258,87 @@ class ObstacleEnv(QuadrupedEnv):
             obs["graph_edges"] = g.edges.astype(np.int64)
             obs["graph_counts"] = np.array([g.n_nodes, g.n_edges], np.int64)
         return obs
+
+    # -- rendering ------------------------------------------------------------------------------
+
+    def render(self):
+        """``rgb_array``/``human``: the scene with the DD-GNG graph, its labels, the attention
+        boxes and the predicted footholds drawn in (``draw_overlay``); ``depth_array``: the four
+        ToF depth images side by side, (H, 4 W) float32 metres, 0 where invalid."""
+        if self.render_mode == "depth_array":
+            if self.frame is None:
+                self._sense_and_perceive(force_frame=True)
+            d = self.frame.depth
+            return np.concatenate(list(d), axis=1).astype(np.float32)
+        if self.draw_overlay and self.render_mode in ("rgb_array", "human"):
+            # Gymnasium draws "markers" (extra visual geoms) into the scene of its next frame.
+            viewer = self.mujoco_renderer._get_viewer(self.render_mode)
+            for marker in overlay_markers(self):
+                viewer.add_marker(**marker)
+        return super().render()
+
+
+_KIND_RGBA = {
+    "terrain": np.array([0.2, 0.85, 0.3, 1.0]),
+    "wall": np.array([0.25, 0.45, 1.0, 1.0]),
+    "object": np.array([1.0, 0.2, 0.15, 1.0]),
+}
+_NODE_RGBA = np.array([1.0, 0.9, 0.1, 1.0])
+
+
+def _segment_marker(a: np.ndarray, b: np.ndarray, radius: float, rgba: np.ndarray) -> dict:
+    import mujoco
+
+    d = b - a
+    length = float(np.linalg.norm(d))
+    z = d / max(length, 1e-9)
+    x = np.cross(z, [0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.cross(z, [1.0, 0.0, 0.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return {
+        "type": mujoco.mjtGeom.mjGEOM_CAPSULE,
+        "size": np.array([radius, length / 2, 0.0]),
+        "pos": (a + b) / 2,
+        "mat": np.column_stack([x, y, z]).ravel(),
+        "rgba": rgba,
+    }
+
+
+def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
+    """Visual markers of the perception state: graph nodes and edges coloured by the kind of
+    surface their facets belong to, attention boxes, and footholds (green safe, red unsafe)."""
+    import mujoco
+
+    markers: list[dict] = []
+    net = env.pipeline.net
+    nodes = net.nodes
+    edges = net.edges
+    aff = env.pipeline.last
+    node_kind = {}
+    if aff is not None and len(aff.facets):
+        for f, lab in zip(aff.facets, aff.facet_labels, strict=True):
+            kind = aff.label_kinds[lab]
+            for i in f:
+                if node_kind.get(int(i)) != "object":
+                    node_kind[int(i)] = kind
+    for i, p in enumerate(nodes):
+        rgba = _KIND_RGBA.get(node_kind.get(i), _NODE_RGBA)
+        markers.append({"type": mujoco.mjtGeom.mjGEOM_SPHERE, "size": np.full(3, 0.009),
+                        "pos": p, "rgba": rgba})  # fmt: skip
+    for a, b in edges[:max_edges]:
+        ka, kb = node_kind.get(int(a)), node_kind.get(int(b))
+        kind = ka if ka == kb else None
+        rgba = _KIND_RGBA[kind] * np.array([1, 1, 1, 0.8]) if kind else np.array([0.9, 0.9, 0.9, 0.5])
+        markers.append(_segment_marker(nodes[a], nodes[b], 0.0025, rgba))
+    for box in env.pipeline.attention_boxes:
+        markers.append({"type": mujoco.mjtGeom.mjGEOM_BOX, "size": (box[1] - box[0]) / 2,
+                        "pos": (box[1] + box[0]) / 2, "rgba": np.array([1.0, 0.3, 0.2, 0.18])})  # fmt: skip
+    if env.eff is not None:
+        for leg in range(4):
+            safe = env.eff.foothold_safe[leg] and env.eff.path_safe[leg]
+            rgba = np.array([0.1, 0.9, 0.2, 0.9]) if safe else np.array([1.0, 0.1, 0.1, 0.9])
+            pos = env.eff.foothold[leg].copy()
+            pos[2] = max(pos[2], 0.0) + 0.005
+            markers.append({"type": mujoco.mjtGeom.mjGEOM_CYLINDER,
+                            "size": np.array([0.025, 0.025, 0.004]), "pos": pos, "rgba": rgba})  # fmt: skip
+    return markers
