@@ -75,6 +75,45 @@ def _cmd_train_aef(args) -> int:
     return 0
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text}")
+    return value
+
+
+def _cmd_bench(args) -> int:
+    from neurocog_gym.bench.runner import BenchConfig, run_benchmark
+
+    scenarios = ("sudden", "static") if args.scenario == "all" else (args.scenario,)
+    cfg = BenchConfig(
+        out=args.out, scenarios=scenarios, trials=args.trials, seed=args.seed, policy=args.policy,
+        attention=args.attention, max_seconds=args.max_seconds, workers=args.workers,
+        ray_address=args.ray_address, resume=args.resume,
+    )  # fmt: skip
+    res = run_benchmark(cfg)
+    for s in scenarios:
+        c = res.summary[s]
+        print(f"{s}: {c['success']} success / {c['touch']} touch / {c['fail']} fail of "
+              f"{c['trials']} (paper {c['paper']['success']}/{c['paper']['touch']}/"
+              f"{c['paper']['fail']} of {c['paper']['trials']})")  # fmt: skip
+    rate = 60.0 * res.ran / res.elapsed_s if res.ran else 0.0
+    print(f"ran {res.ran} trials ({res.skipped} already done) on {res.workers} worker(s) in "
+          f"{res.elapsed_s:.0f} s: {rate:.1f} trials/min")  # fmt: skip
+    print(f"results in {cfg.out}: trials.jsonl, summary.json, report.md")
+    return 0
+
+
+def _cmd_bench_report(args) -> int:
+    from neurocog_gym.bench.report import write_report
+
+    print(f"report: {write_report(args.runs, args.out)}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = argparse.ArgumentParser(
@@ -91,22 +130,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-video", action="store_true", help="skip the video (faster)")
     p.set_defaults(func=_cmd_demo)
 
-    p = sub.add_parser("tune-cpg", help="NSGA-II tuning of the CPG chromosome (Table 3)",
-                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
-    p.add_argument("--pop-size", type=int, default=None, help="population (None: 128, Table 3)")
+    # Defaults are written in the help: None means "Table 3's value, or the run's on --resume".
+    p = sub.add_parser("tune-cpg", help="NSGA-II tuning of the CPG chromosome (Table 3)")
+    p.add_argument("--pop-size", type=int, default=None, help="population (default 128, Table 3)")
     p.add_argument("--generations", type=int, default=None,
-                   help="generations incl. the initial one (None: 100; on --resume may extend)")  # fmt: skip
+                   help="generations, first included (default 100; --resume may add)")  # fmt: skip
     p.add_argument("--eval-seconds", type=_positive_float, default=None,
-                   help="simulated seconds per evaluation (None: 10)")  # fmt: skip
+                   help="simulated seconds per evaluation (default 10)")  # fmt: skip
     p.add_argument("--workers", type=int, default=None,
-                   help="parallel evaluations (None: every local core / every Ray CPU)")  # fmt: skip
-    p.add_argument("--seed", type=_nonneg_int, default=None, help="run seed (None: 0)")
-    p.add_argument("--out", default="runs/nsga", help="run folder")
+                   help="parallel evaluations (default: all local cores / Ray CPUs)")  # fmt: skip
+    p.add_argument("--seed", type=_nonneg_int, default=None, help="run seed (default 0)")
+    p.add_argument("--out", default="runs/nsga", help="run folder (default runs/nsga)")
     p.add_argument("--ray-address", default=None,
-                   help="evaluate on this running Ray cluster (host:port, ray://host:port, auto)")  # fmt: skip
+                   help="running Ray cluster: host:port, ray://host:port or auto")  # fmt: skip
     p.add_argument("--resume", action="store_true", help="continue the run in --out")
     p.add_argument("--base-gait", default=None,
-                   help="gait JSON whose genes are tuned (None: the shipped default)")  # fmt: skip
+                   help="gait JSON whose genes are tuned (default: the shipped gait)")  # fmt: skip
     p.set_defaults(func=_cmd_tune_cpg)
 
     p = sub.add_parser("train-aef", help="motor babbling + backpropagation of the AEF network",
@@ -119,6 +158,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--export", action="store_true",
                    help="copy the trained weights over the shipped assets/aef_weights.npz")  # fmt: skip
     p.set_defaults(func=_cmd_train_aef)
+
+    p = sub.add_parser("bench", help="sudden- and static-obstacle trials beside Table 4 (§6.5)",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
+    p.add_argument("--scenario", choices=("sudden", "static", "all"), default="all",
+                   help="which obstacle task")  # fmt: skip
+    p.add_argument("--trials", type=_positive_int, default=50,
+                   help="per scenario (paper: 50)")  # fmt: skip
+    p.add_argument("--seed", type=_nonneg_int, default=0,
+                   help="run seed (trial seeds derive from seed, scenario, i)")  # fmt: skip
+    p.add_argument("--policy", default="aef",
+                   help="aef, blind, or a saved stable-baselines3 model (.zip)")  # fmt: skip
+    p.add_argument("--attention", choices=("on", "off"), default="on",
+                   help="off: plain GNG instead of DD-GNG attention (the ablation)")  # fmt: skip
+    p.add_argument("--max-seconds", type=_positive_float, default=None,
+                   help="simulated seconds per trial (None: 7 s sudden, 10 s static)")  # fmt: skip
+    p.add_argument("--workers", type=_positive_int, default=None,
+                   help="parallel trials (None: all local cores / Ray CPUs)")  # fmt: skip
+    p.add_argument("--ray-address", default=None,
+                   help="running Ray cluster: host:port, ray://host:port or auto")  # fmt: skip
+    p.add_argument("--out", default="runs/bench", help="run folder")
+    p.add_argument("--resume", action="store_true", help="run only the trials missing in --out")
+    p.set_defaults(func=_cmd_bench)
+
+    p = sub.add_parser("bench-report", help="one report over several bench runs (ablations)",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
+    p.add_argument("runs", nargs="+", help="bench run folders, shown side by side")
+    p.add_argument("--out", default="runs/bench_report", help="folder of report.md and plots")
+    p.set_defaults(func=_cmd_bench_report)
     return parser
 
 

@@ -9,11 +9,28 @@ is our reading, each value in [-1, 1], 0 = the gait as tuned):
 
 * s_SAG scales the hip-flexion drive (stride length) by ``1 + sag_gain * s_SAG``.
 * s_DIR turns: left hips scale by ``1 - dir_gain * s_DIR``, right hips by ``1 + dir_gain * s_DIR``
-  (positive turns left, counter-clockwise seen from above).
-* s_COR steps sideways: each abduction joint adds ``cor_gain * s_COR`` times the hip's
+  (positive turns left, counter-clockwise seen from above), and the abduction joints steer: each
+  adds ``dir_steer * s_DIR`` times the hip's (unscaled) protraction drive, with the sign of the
+  front legs reversed for the hind legs. In a trot a diagonal stance pair cannot rotate the body
+  by fore-aft stride differences alone (the two feet would have to slide sideways), so the stance
+  feet also sweep sideways along the turning circle: front feet to the right and hind feet to the
+  left for a left turn. Without the steering term s_DIR = 0.5 turned the trot by only about
+  5 deg/s (measured while designing the default gait).
+* s_COR steps sideways: each abduction joint adds ``cor_gain * s_COR`` times the hip's (unscaled)
   protraction drive, so a swinging foot moves to +y (left) for positive s_COR and pushes back in
-  stance.
+  stance. Front legs get ``1 + cor_front_bias`` of it and hind legs ``1 - cor_front_bias``: with
+  equal shares the hind legs' side push dominated and a side step also turned the body (about
+  25 deg/s away from the step at s_COR = 0.5, measured while designing the default gait).
 The provision is low-pass filtered (``provision_tau``): the CPG is a medium-term process (§5).
+
+Soft start (our addition, ``start_ramp``): after :meth:`LocomotionGenerator.reset` the whole CPG
+drive fades in linearly over ``start_ramp`` seconds. The CPG starts in full trot, and without the
+ramp the first strides from the standing pose kicked the body by up to 15 degrees in roll and
+pitch; the open-loop trot then kept whatever heading the kick left (10 seeds x 60 s: lateral drift
+up to 6.6 m and heading changes up to 9 degrees without the ramp, below 0.8 m and 5.4 degrees
+with a 1 s ramp), and a strong turn command right at the start could tip it over.
+The provision never touches the CPG itself (Eq. 5-7) or the motor-neuron equation (Eq. 8): it
+only scales and mixes the CPG drive on its way to the pools.
 """
 
 from __future__ import annotations
@@ -33,6 +50,7 @@ _JOINT_NEURONS = np.array(
 # Sign that turns "flexor active" into the joint acceleration: hip flexor protracts (angle
 # decreases), knee flexor folds (increases), abduction flexor moves the foot outwards.
 _SIDE = np.array([1.0, -1.0, 1.0, -1.0])  # FL, FR, HL, HR: +y is outwards for left legs
+_FRONT = np.array([1.0, 1.0, -1.0, -1.0])  # FL, FR, HL, HR: +1 front, -1 hind
 _JOINT_SIGN = np.array([s for leg in range(4) for s in (_SIDE[leg], -1.0, 1.0)])
 HIP_JOINTS = np.array([3 * leg + 1 for leg in range(4)])
 ABDUCT_JOINTS = np.array([3 * leg for leg in range(4)])
@@ -44,12 +62,19 @@ class ProvisionParams:
 
     sag_gain: float = 0.6
     """Fractional stride change per unit s_SAG."""
-    dir_gain: float = 0.5
+    dir_gain: float = 0.3
     """Fractional left/right stride difference per unit s_DIR."""
+    dir_steer: float = 0.2
+    """Abduction steering per unit s_DIR, relative to the hip's protraction drive (front legs
+    one way, hind legs the other)."""
     cor_gain: float = 0.6
     """Abduction drive per unit s_COR, relative to the hip's protraction drive."""
-    provision_tau: float = 0.15
+    cor_front_bias: float = 0.3
+    """Front legs take 1 + this, hind legs 1 - this of the side step (no turn while stepping)."""
+    provision_tau: float = 0.5
     """Low-pass time constant of the provision, s."""
+    start_ramp: float = 1.0
+    """Seconds over which the CPG drive fades in after a reset (soft start); 0 disables it."""
 
 
 class LocomotionGenerator:
@@ -92,6 +117,7 @@ class LocomotionGenerator:
         self.provision = np.zeros(3)
         self.drive = np.zeros(12)
         self.hip_drive = np.zeros(4)
+        self.elapsed = 0.0
 
     def reset(self, rng: np.random.Generator | None = None, noise: float = 0.05) -> None:
         """Reset to the standing posture with the CPG started in a trot phase.
@@ -107,6 +133,7 @@ class LocomotionGenerator:
         self.cpg.reset(x0)
         self.provision[:] = 0.0
         self.drive[:] = 0.0
+        self.elapsed = 0.0
         self.pools.reset(self.posture)
 
     def _drive(self, y: np.ndarray) -> np.ndarray:
@@ -114,10 +141,15 @@ class LocomotionGenerator:
         ye = y[_JOINT_NEURONS[:, 1]]
         s_sag, s_cor, s_dir = self.provision
         drive = self.g_flex * yf - self.g_ext * ye
+        # Hip drive is negative while the leg protracts (swing); the foot then moves to +y.
+        protraction = drive[HIP_JOINTS].copy()
         scale = (1.0 + self.prov.sag_gain * s_sag) * (1.0 - self.prov.dir_gain * s_dir * _SIDE)
         drive[HIP_JOINTS] *= scale
-        # Hip drive is negative while the leg protracts (swing); the foot then moves to +y.
-        drive[ABDUCT_JOINTS] += -self.prov.cor_gain * s_cor * drive[HIP_JOINTS]
+        lateral = (
+            self.prov.cor_gain * s_cor * (1.0 + self.prov.cor_front_bias * _FRONT)
+            + self.prov.dir_steer * s_dir * _FRONT
+        )
+        drive[ABDUCT_JOINTS] += -lateral * protraction
         self.hip_drive[:] = yf[HIP_JOINTS] - ye[HIP_JOINTS]
         return drive
 
@@ -127,7 +159,8 @@ class LocomotionGenerator:
         Args:
             provision: (3,) walking provision (s_SAG, s_COR, s_DIR) in [-1, 1].
             interrupt: (12,) interrupt Theta in [-1, 1].
-            theta, theta_dot: (12,) measured joint angles and rates.
+            theta: (12,) measured joint angles, rad.
+            theta_dot: (12,) measured joint rates, rad/s.
             touch: (4,) normalised touch inputs (1 ~ a quarter of the body weight).
 
         Returns:
@@ -137,6 +170,9 @@ class LocomotionGenerator:
         self.provision += a * (np.asarray(provision, dtype=np.float64) - self.provision)
         y = self.cpg.step(touch)
         self.drive[:] = self._drive(y)
+        self.elapsed += self.dt
+        if self.elapsed < self.prov.start_ramp:
+            self.drive *= self.elapsed / self.prov.start_ramp
         return self.pools.step(self.drive, interrupt, theta, theta_dot, touch)
 
     @property

@@ -5,16 +5,22 @@ constants below are compile-time constants). The public wrappers, with validatio
 documentation of every choice, are :mod:`neurocog_gym.perception.affordance` and
 :mod:`neurocog_gym.perception.similarity`.
 
-Adjacency is CSR with slack, built in two passes over the edge array (count, fill): row ``i`` of
-the flat array ``adj`` starts at ``start[i]``, holds ``deg[i]`` neighbours and has room for
-``cap[i]`` (its input degree plus ``SLACK``), so the quad diagonals are appended in place.
-``twin[s]`` is the slot of the reverse direction of slot ``s``. Rows are laid out in node order,
-so the id of an undirected edge, ``min(s, twin[s])``, is its slot in the lower node's row; edge
-ids index the edge-to-facet table ``ecnt``/``eface``.
+Adjacency is CSR with slack, built in two passes over the edge array (count, fill), in two
+forms: the forward rows ``fwd`` (each node's higher neighbours) and the full rows ``adj``. Row
+``i`` starts at ``fstart[i]`` (``start[i]``), holds ``fdeg[i]`` (``deg[i]``) entries and has room
+for ``SLACK`` more, so the quad diagonals are appended in place. The slot of ``hi`` in forward row
+``lo`` is the id of edge ``lo-hi``; ``aeid`` gives the edge id of each full-row slot. Edge ids
+index the edge-to-facet table ``ecnt``/``eface``. Triangles are enumerated over the forward rows
+only (each once, no order tests in the inner loop).
 
-Facets are stored as ``fi`` (cap, 6) int64 ``(v0, v1, v2, e0, e1, e2)`` (vertices wound so the
-right-hand normal is the oriented one, and the ids of the three edges) and ``ff`` (cap, 7)
+Facets are stored as ``fi`` (F, 6) int32 ``(v0, v1, v2, e0, e1, e2)`` (vertices wound so the
+right-hand normal is the oriented one, and the ids of the three edges) and ``ff`` (F, 7)
 float64 ``(nx, ny, nz, cx, cy, cz, area)``.
+
+Speed notes (measured on the 2-core project machine): hot loops call no helper that takes arrays
+(numba reference-counts array arguments of a non-inlined call with atomic operations, which cost
+more than the geometry), arrays are never re-bound inside loops, and index arrays are int32 to
+keep the working set in cache.
 """
 
 from __future__ import annotations
@@ -25,10 +31,10 @@ from numba import njit
 KIND_TERRAIN = 0
 KIND_WALL = 1
 KIND_OBJECT = 2
-SLACK = 6
+SLACK = 4
 """Free adjacency slots per row for quad diagonals."""
-MAX_PER_EDGE = 4
-"""Facets remembered per edge (a manifold surface has at most two)."""
+MAX_PER_EDGE = 3
+"""Facets remembered per edge (a manifold surface has at most two; a third flags internal ones)."""
 
 # Packed parameter vector (``AffordanceParams.packed``).
 P_MAX_FACETS = 0
@@ -44,7 +50,7 @@ P_DENSITY = 9
 P_PADDING = 10
 N_PARAMS = 11
 
-# Label table columns (one row per label).
+# Label table columns (one row per label; positions, normals and boxes are separate arrays).
 L_KIND = 0
 L_HEIGHT = 1
 L_WIDTH = 2
@@ -54,10 +60,7 @@ L_DENSITY = 5
 L_SIZE = 6
 L_NNODES = 7
 L_SUSPECTED = 8
-L_POS = 9
-L_NORMAL = 12
-L_BOX = 15
-N_LABEL_COLS = 21
+N_LABEL_COLS = 9
 
 # Mode bits of ``detect_kernel``.
 MODE_ORIENT_AWAY = 1
@@ -77,33 +80,25 @@ def finite_rows(points):
 
 
 @njit(cache=True)
-def _row_find(adj, start, deg, a, b):
-    """Return the slot of ``b`` in row ``a``, or -1."""
-    s = start[a]
-    for k in range(deg[a]):
-        if adj[s + k] == b:
-            return s + k
-    return -1
-
-
-@njit(cache=True)
 def build_adjacency(valid, edges, slack):
-    """CSR-with-slack adjacency from an undirected edge list, two passes over ``edges``.
+    """Forward and full adjacency, CSR with slack, in two passes over ``edges`` (count, fill).
 
     Args:
         valid: (n,) bool, nodes that may carry edges (finite coordinates).
         edges: (m, 2) int64 node indices; self-loops, duplicates and edges touching an invalid
             node are dropped.
-        slack: free slots per non-isolated row, for the diagonals.
+        slack: free slots per non-isolated row, for the quad diagonals.
 
     Returns:
-        ``(adj, twin, start, cap, deg, n_bad)``: flat neighbour and reverse-slot arrays, (n + 1,)
-        row starts, (n,) row capacities, (n,) degrees, and the number of edges with an index
+        ``(fwd, fstart, fcap, fdeg, adj, aeid, start, cap, deg, n_bad)``: the forward rows (each
+        node's higher neighbours; the slot of ``hi`` in row ``lo`` is the id of edge ``lo-hi``),
+        the full rows with the edge id of each slot, and the number of edges with an index
         outside [0, n).
     """
     n = valid.shape[0]
     m = edges.shape[0]
     deg = np.zeros(n, np.int64)
+    fdeg = np.zeros(n, np.int64)
     n_bad = 0
     for e in range(m):
         a = edges[e, 0]
@@ -114,302 +109,350 @@ def build_adjacency(valid, edges, slack):
         if a != b and valid[a] and valid[b]:
             deg[a] += 1
             deg[b] += 1
+            fdeg[min(a, b)] += 1
     start = np.empty(n + 1, np.int64)
     cap = np.empty(n, np.int64)
+    fstart = np.empty(n + 1, np.int64)
+    fcap = np.empty(n, np.int64)
     total = 0
+    ftotal = 0
     for i in range(n):
         start[i] = total
+        fstart[i] = ftotal
         cap[i] = deg[i] + slack if deg[i] > 0 else 0
+        fcap[i] = fdeg[i] + slack if deg[i] > 0 else 0
         total += cap[i]
+        ftotal += fcap[i]
     start[n] = total
-    adj = np.empty(max(total, 1), np.int64)
-    twin = np.empty(max(total, 1), np.int64)
+    fstart[n] = ftotal
+    adj = np.empty(max(total, 1), np.int32)
+    aeid = np.empty(max(total, 1), np.int32)
+    fwd = np.empty(max(ftotal, 1), np.int32)
     deg[:] = 0
+    fdeg[:] = 0
     for e in range(m):
         a = edges[e, 0]
         b = edges[e, 1]
         if a < 0 or b < 0 or a >= n or b >= n or a == b or not valid[a] or not valid[b]:
             continue
-        if _row_find(adj, start, deg, a, b) >= 0:
+        lo = min(a, b)
+        hi = max(a, b)
+        # Duplicate edges: scan the (short) forward row; no helper call in the hot loop.
+        s = fstart[lo]
+        dup = False
+        for k in range(fdeg[lo]):
+            if fwd[s + k] == hi:
+                dup = True
+                break
+        if dup:
             continue
-        pa = start[a] + deg[a]
-        pb = start[b] + deg[b]
-        adj[pa] = b
-        adj[pb] = a
-        twin[pa] = pb
-        twin[pb] = pa
-        deg[a] += 1
-        deg[b] += 1
-    return adj, twin, start, cap, deg, n_bad
-
-
-@njit(cache=True)
-def _sqdist(nodes, a, b):
-    dx = nodes[a, 0] - nodes[b, 0]
-    dy = nodes[a, 1] - nodes[b, 1]
-    dz = nodes[a, 2] - nodes[b, 2]
-    return dx * dx + dy * dy + dz * dz
-
-
-@njit(cache=True)
-def _grow(fi, ff):
-    """Double the facet capacity."""
-    cap = 2 * fi.shape[0]
-    fi2 = np.empty((cap, 6), np.int64)
-    ff2 = np.empty((cap, 7), np.float64)
-    fi2[: fi.shape[0]] = fi
-    ff2[: ff.shape[0]] = ff
-    return fi2, ff2
-
-
-@njit(cache=True)
-def _add_facet(nodes, u, v, w, e0, e1, e2, origin, away, min_quality, fi, ff, nf, ecnt, eface):
-    """Append facet (u, v, w) with Eq. (1) normal unless it is a sliver; return the new count."""
-    # Eq. (1): N = (n0 - n1) x (n0 - n2) / |(n0 - n1) x (n0 - n2)|.
-    e1x = nodes[u, 0] - nodes[v, 0]
-    e1y = nodes[u, 1] - nodes[v, 1]
-    e1z = nodes[u, 2] - nodes[v, 2]
-    e2x = nodes[u, 0] - nodes[w, 0]
-    e2y = nodes[u, 1] - nodes[w, 1]
-    e2z = nodes[u, 2] - nodes[w, 2]
-    cx = e1y * e2z - e1z * e2y
-    cy = e1z * e2x - e1x * e2z
-    cz = e1x * e2y - e1y * e2x
-    c2 = np.sqrt(cx * cx + cy * cy + cz * cz)
-    longest = max(
-        e1x * e1x + e1y * e1y + e1z * e1z,
-        max(e2x * e2x + e2y * e2y + e2z * e2z, _sqdist(nodes, v, w)),
-    )
-    # Slivers (collinear or duplicate nodes): 2 * area / longest_edge**2 below min_quality.
-    if not (c2 > 1e-14) or c2 < min_quality * longest:
-        return nf
-    nx = cx / c2
-    ny = cy / c2
-    nz = cz / c2
-    mx = (nodes[u, 0] + nodes[v, 0] + nodes[w, 0]) / 3.0
-    my = (nodes[u, 1] + nodes[v, 1] + nodes[w, 1]) / 3.0
-    mz = (nodes[u, 2] + nodes[v, 2] + nodes[w, 2]) / 3.0
-    side = nx * (origin[0] - mx) + ny * (origin[1] - my) + nz * (origin[2] - mz)
-    fi[nf, 0] = u
-    if (side > 0.0) if away else (side < 0.0):
-        nx = -nx
-        ny = -ny
-        nz = -nz
-        fi[nf, 1] = w
-        fi[nf, 2] = v
-    else:
-        fi[nf, 1] = v
-        fi[nf, 2] = w
-    fi[nf, 3] = e0
-    fi[nf, 4] = e1
-    fi[nf, 5] = e2
-    ff[nf, 0] = nx
-    ff[nf, 1] = ny
-    ff[nf, 2] = nz
-    ff[nf, 3] = mx
-    ff[nf, 4] = my
-    ff[nf, 5] = mz
-    ff[nf, 6] = 0.5 * c2
-    for e in (e0, e1, e2):
-        c = ecnt[e]
-        if c < MAX_PER_EDGE:
-            eface[e, c] = nf
-        ecnt[e] = c + 1
-    return nf + 1
+        eid = fstart[lo] + fdeg[lo]
+        fwd[eid] = hi
+        fdeg[lo] += 1
+        s = start[lo] + deg[lo]
+        adj[s] = hi
+        aeid[s] = eid
+        deg[lo] += 1
+        s = start[hi] + deg[hi]
+        adj[s] = lo
+        aeid[s] = eid
+        deg[hi] += 1
+    return fwd, fstart, fcap, fdeg, adj, aeid, start, cap, deg, n_bad
 
 
 @njit(cache=True)
 def triangulate_graph(nodes, edges, origin, away, max_facets, min_quality):
     """Facets of a graph: 3-cycles, then quads closed by their shorter diagonal (SPEC §4).
 
-    Every 3-cycle is a facet. A chordless 4-cycle whose four edges each border at most one facet
-    is a quad hole of the mesh: it gets its shorter diagonal (``a-c`` on a tie), and every
-    3-cycle through the new edge becomes a facet. (A chordless 4-cycle whose edges already carry
-    two facets, such as the link of a degree-4 node, is no hole and is left alone.) A facet whose
-    three edges each carry two or more other facets is internal (spanned across a closed shape
-    by diagonals, or a face of a volumetric GNG tetrahedron) and is dropped.
+    Runs :func:`_triangulate_once` with a capacity for a surface mesh (1.5 facets per edge) and
+    retries with twice the capacity, up to ``max_facets``, if that was too small. (Growing the
+    arrays inside the enumeration loop instead makes numba refcount them on every iteration,
+    which tripled the run time.)
+
+    Returns:
+        As :func:`_triangulate_once`; ``truncated`` means ``max_facets`` was reached.
+    """
+    m = edges.shape[0]
+    fcap = max(16, min(max_facets, m + m // 2 + 16))
+    while True:
+        fi, ff, nf, truncated, n_bad, ecnt, eface = _triangulate_once(
+            nodes, edges, origin, away, fcap, min_quality
+        )
+        if not truncated or fcap >= max_facets:
+            return fi, ff, nf, truncated, n_bad, ecnt, eface
+        fcap = min(max_facets, 2 * fcap)
+
+
+@njit(cache=True)
+def _triangulate_once(nodes, edges, origin, away, fcap, min_quality):
+    """One triangulation pass with facet capacity ``fcap``.
+
+    Every 3-cycle is a facet. A chordless 4-cycle whose four edges each border at most one
+    3-cycle is a quad hole of the mesh: it gets its shorter diagonal (``a-c`` on a tie), and
+    every 3-cycle through the new edge becomes a facet. (A chordless 4-cycle whose edges already
+    carry two facets, such as the link of a degree-4 node, is no hole and is left alone.)
+    Slivers are then skipped, and a facet whose three edges each carry two or more other facets
+    is internal (spanned across a closed shape by diagonals, or a face of a volumetric GNG
+    tetrahedron) and is dropped.
+
+    The hot loops call no helper that takes arrays: numba reference-counts array arguments of
+    such calls with atomic operations, which cost more than the geometry here.
 
     Args:
         nodes: (n, 3) float64, metres.
         edges: (m, 2) int64 node indices.
         origin: (3,) float64, metres: facet normals face it, or face away from it with ``away``.
         away: bool, orient away from ``origin`` (the caller passes the node centroid).
-        max_facets: facet capacity; enumeration stops there.
+        fcap: facet capacity; enumeration stops there.
         min_quality: sliver threshold on 2 * area / longest_edge**2 (equilateral: 0.866).
 
     Returns:
-        ``(fi, ff, nf, truncated, n_bad, ecnt, eface)``: facet arrays (first ``nf`` rows valid,
-        internal facets already removed), whether ``max_facets`` was hit, the number of edges
-        with an out-of-range index, and the edge-to-facet table (indices before removal; only
-        meaningful when no facet was removed).
+        ``(fi, ff, nf, truncated, n_bad, ecnt, eface)``: facet arrays (first ``nf`` rows
+        valid), whether ``fcap`` was hit, the number of edges with an out-of-range index, and
+        the edge-to-facet table of the returned facets (facet count per edge id, first
+        ``MAX_PER_EDGE`` facets).
     """
     n = nodes.shape[0]
     valid = finite_rows(nodes)
-    adj, twin, start, cap, deg, n_bad = build_adjacency(valid, edges, SLACK)
-    total = start[n]
-    m2 = 0
-    for i in range(n):
-        m2 += deg[i]
-    ecnt = np.zeros(max(total, 1), np.int64)
-    eface = np.empty((max(total, 1), MAX_PER_EDGE), np.int64)
-    fcap = max(16, min(max_facets, m2 // 2 + 16))
-    fi = np.empty((fcap, 6), np.int64)
-    ff = np.empty((fcap, 7), np.float64)
-    nf = 0
+    fwd, fstart, fcapr, fdeg, adj, aeid, start, cap, deg, n_bad = build_adjacency(
+        valid, edges, SLACK
+    )
+    ne = max(fstart[n], 1)
+    ecnt = np.zeros(ne, np.int32)
+    # Candidate facets (u, v, w, e_uv, e_vw, e_uw) before the geometry tests.
+    cand = np.empty((fcap, 6), np.int32)
+    nc = 0
     truncated = False
     mark = np.full(n, -1, np.int64)
     mslot = np.empty(n, np.int64)
 
-    # All 3-cycles u < v < w; mslot[w] remembers the slot u -> w for the third edge's id.
+    # All 3-cycles u < v < w over the forward rows; every edge of one is a forward edge.
     for u in range(n):
-        su = start[u]
-        du = deg[u]
-        for k in range(du):
-            mark[adj[su + k]] = u
-            mslot[adj[su + k]] = su + k
-        for k in range(du):
-            v = adj[su + k]
-            if v <= u:
-                continue
-            e_uv = su + k
-            sv = start[v]
-            for k2 in range(deg[v]):
-                w = adj[sv + k2]
-                if w <= v or mark[w] != u:
+        fu = fstart[u]
+        for k in range(fdeg[u]):
+            mark[fwd[fu + k]] = u
+            mslot[fwd[fu + k]] = fu + k
+        for k in range(fdeg[u]):
+            v = fwd[fu + k]
+            fv = fstart[v]
+            for k2 in range(fdeg[v]):
+                w = fwd[fv + k2]
+                if mark[w] != u:
                     continue
-                if nf >= max_facets:
+                if nc >= fcap:
                     truncated = True
                     continue
-                if nf >= fi.shape[0]:
-                    fi, ff = _grow(fi, ff)
-                nf = _add_facet(
-                    nodes,
-                    u,
-                    v,
-                    w,
-                    e_uv,
-                    sv + k2,
-                    mslot[w],
-                    origin,
-                    away,
-                    min_quality,
-                    fi,
-                    ff,
-                    nf,
-                    ecnt,
-                    eface,
-                )
+                e0 = fu + k
+                e1 = fv + k2
+                e2 = mslot[w]
+                cand[nc, 0] = u
+                cand[nc, 1] = v
+                cand[nc, 2] = w
+                cand[nc, 3] = e0
+                cand[nc, 4] = e1
+                cand[nc, 5] = e2
+                ecnt[e0] += 1
+                ecnt[e1] += 1
+                ecnt[e2] += 1
+                nc += 1
 
-    # Quad holes a-b-c-d, found once from their lowest node a with b < d.
+    # Low edges (at most one facet), both directions, as CSR: a quad hole has only low edges.
+    lcnt = np.zeros(n + 1, np.int64)
+    for u in range(n):
+        fu = fstart[u]
+        for k in range(fdeg[u]):
+            if ecnt[fu + k] <= 1:
+                lcnt[u + 1] += 1
+                lcnt[fwd[fu + k] + 1] += 1
+    for i in range(n):
+        lcnt[i + 1] += lcnt[i]
+    lfill = lcnt[:n].copy()
+    low = np.empty(max(lcnt[n], 1), np.int32)
+    leid = np.empty(max(lcnt[n], 1), np.int32)
+    for u in range(n):
+        fu = fstart[u]
+        for k in range(fdeg[u]):
+            if ecnt[fu + k] <= 1:
+                v = fwd[fu + k]
+                low[lfill[u]] = v
+                leid[lfill[u]] = fu + k
+                lfill[u] += 1
+                low[lfill[v]] = u
+                leid[lfill[v]] = fu + k
+                lfill[v] += 1
+
+    # Quad holes a-b-c-d over low edges, found once from their lowest node a with b < d.
     mark[:] = -1
+    mark2 = np.full(n, -1, np.int64)
+    mslot2 = np.empty(n, np.int64)
+    ndiag = 0
     for a in range(n):
-        if deg[a] < 2:
+        if lcnt[a + 1] - lcnt[a] < 2:
             continue
-        sa = start[a]
-        for k in range(deg[a]):
-            mark[adj[sa + k]] = a
-            mslot[adj[sa + k]] = sa + k
-        ka = 0
-        while ka < deg[a]:
-            s_ab = sa + ka
-            ka += 1
-            b = adj[s_ab]
-            if b < a or ecnt[min(s_ab, twin[s_ab])] >= 2:
+        fa = fstart[a]
+        for k in range(fdeg[a]):
+            mark[fwd[fa + k]] = a
+            mslot[fwd[fa + k]] = fa + k
+        for la in range(lcnt[a], lcnt[a + 1]):
+            b = low[la]
+            e_ab = leid[la]
+            if b < a:
                 continue
-            sb = start[b]
-            for kb in range(deg[b]):
-                s_bc = sb + kb
-                c = adj[s_bc]
-                if c <= a or mark[c] == a or ecnt[min(s_bc, twin[s_bc])] >= 2:
+            for lb in range(lcnt[b], lcnt[b + 1]):
+                c = low[lb]
+                e_bc = leid[lb]
+                if c <= a or mark[c] == a:
                     continue
-                sc = start[c]
-                for kc in range(deg[c]):
-                    s_cd = sc + kc
-                    d = adj[s_cd]
-                    if d <= b or mark[d] != a or ecnt[min(s_cd, twin[s_cd])] >= 2:
+                for lc in range(lcnt[c], lcnt[c + 1]):
+                    d = low[lc]
+                    if d <= b or mark[d] != a:
                         continue
-                    s_ad = mslot[d]
-                    if ecnt[min(s_ad, twin[s_ad])] >= 2:
+                    e_ad = mslot[d]
+                    if ecnt[leid[lc]] > 1 or ecnt[e_ad] > 1:
                         continue
                     # Facets added for an earlier quad may have closed this one.
-                    if mark[c] == a or ecnt[min(s_ab, twin[s_ab])] >= 2:
+                    if ecnt[e_ab] > 1 or ecnt[e_bc] > 1 or mark[c] == a:
                         break
-                    if ecnt[min(s_bc, twin[s_bc])] >= 2:
-                        break
-                    if _row_find(adj, start, deg, b, d) >= 0:
+                    chord = False
+                    fb = fstart[b]
+                    for k in range(fdeg[b]):
+                        if fwd[fb + k] == d:
+                            chord = True
+                            break
+                    if chord:
                         continue
-                    if _sqdist(nodes, a, c) <= _sqdist(nodes, b, d):
+                    # The shorter diagonal, a-c on a tie.
+                    d_ac = 0.0
+                    d_bd = 0.0
+                    for x in range(3):
+                        d_ac += (nodes[a, x] - nodes[c, x]) ** 2
+                        d_bd += (nodes[b, x] - nodes[d, x]) ** 2
+                    if d_ac <= d_bd:
                         p = a
                         q = c
                     else:
                         p = b
                         q = d
-                    if deg[p] >= cap[p] or deg[q] >= cap[q]:
+                    if fdeg[p] >= fcapr[p] or deg[p] >= cap[p] or deg[q] >= cap[q]:
                         continue
-                    sp = start[p] + deg[p]
-                    sq = start[q] + deg[q]
-                    adj[sp] = q
-                    adj[sq] = p
-                    twin[sp] = sq
-                    twin[sq] = sp
+                    e_pq = fstart[p] + fdeg[p]
+                    fwd[e_pq] = q
+                    fdeg[p] += 1
+                    adj[start[p] + deg[p]] = q
+                    aeid[start[p] + deg[p]] = e_pq
                     deg[p] += 1
+                    adj[start[q] + deg[q]] = p
+                    aeid[start[q] + deg[q]] = e_pq
                     deg[q] += 1
                     if p == a:
                         mark[c] = a
-                        mslot[c] = sp
-                    e_pq = min(sp, sq)
+                        mslot[c] = e_pq
                     # Every 3-cycle through the new edge p-q is a facet.
+                    sq = start[q]
+                    for kq in range(deg[q] - 1):
+                        mark2[adj[sq + kq]] = ndiag
+                        mslot2[adj[sq + kq]] = aeid[sq + kq]
+                    sp = start[p]
                     for kp in range(deg[p] - 1):
-                        s_px = start[p] + kp
-                        x = adj[s_px]
-                        s_qx = _row_find(adj, start, deg, q, x)
-                        if s_qx < 0:
+                        x = adj[sp + kp]
+                        if mark2[x] != ndiag:
                             continue
-                        if nf >= max_facets:
+                        if nc >= fcap:
                             truncated = True
                             continue
-                        if nf >= fi.shape[0]:
-                            fi, ff = _grow(fi, ff)
-                        nf = _add_facet(
-                            nodes,
-                            p,
-                            q,
-                            x,
-                            e_pq,
-                            min(s_qx, twin[s_qx]),
-                            min(s_px, twin[s_px]),
-                            origin,
-                            away,
-                            min_quality,
-                            fi,
-                            ff,
-                            nf,
-                            ecnt,
-                            eface,
-                        )
+                        e1 = mslot2[x]
+                        e2 = aeid[sp + kp]
+                        cand[nc, 0] = p
+                        cand[nc, 1] = q
+                        cand[nc, 2] = x
+                        cand[nc, 3] = e_pq
+                        cand[nc, 4] = e1
+                        cand[nc, 5] = e2
+                        ecnt[e_pq] += 1
+                        ecnt[e1] += 1
+                        ecnt[e2] += 1
+                        nc += 1
+                    ndiag += 1
                     if p == a:
                         break
 
-    # Drop internal facets (all three edges shared with two or more other facets).
-    nk = 0
-    for f in range(nf):
-        if ecnt[fi[f, 3]] >= 3 and ecnt[fi[f, 4]] >= 3 and ecnt[fi[f, 5]] >= 3:
+    # Geometry of the candidates: Eq. (1) normal, orientation, centre, area; slivers skipped.
+    # A facet whose three edges each carry two or more other candidates is internal.
+    fi = np.empty((nc, 6), np.int32)
+    ff = np.empty((nc, 7), np.float64)
+    ox = origin[0]
+    oy = origin[1]
+    oz = origin[2]
+    third = 1.0 / 3.0
+    nf = 0
+    for t in range(nc):
+        if ecnt[cand[t, 3]] >= 3 and ecnt[cand[t, 4]] >= 3 and ecnt[cand[t, 5]] >= 3:
             continue
-        if nk != f:
-            fi[nk] = fi[f]
-            ff[nk] = ff[f]
-        nk += 1
-    if nk != nf:
-        # Rebuild the edge-to-facet table for the kept facets.
-        ecnt[:] = 0
-        for f in range(nk):
-            for e in range(3):
-                eid = fi[f, 3 + e]
-                c = ecnt[eid]
-                if c < MAX_PER_EDGE:
-                    eface[eid, c] = f
-                ecnt[eid] = c + 1
-    return fi, ff, nk, truncated, n_bad, ecnt, eface
+        u = cand[t, 0]
+        v = cand[t, 1]
+        w = cand[t, 2]
+        # Eq. (1): N = (n0 - n1) x (n0 - n2) / |(n0 - n1) x (n0 - n2)|.
+        e1x = nodes[u, 0] - nodes[v, 0]
+        e1y = nodes[u, 1] - nodes[v, 1]
+        e1z = nodes[u, 2] - nodes[v, 2]
+        e2x = nodes[u, 0] - nodes[w, 0]
+        e2y = nodes[u, 1] - nodes[w, 1]
+        e2z = nodes[u, 2] - nodes[w, 2]
+        e3x = nodes[v, 0] - nodes[w, 0]
+        e3y = nodes[v, 1] - nodes[w, 1]
+        e3z = nodes[v, 2] - nodes[w, 2]
+        cx = e1y * e2z - e1z * e2y
+        cy = e1z * e2x - e1x * e2z
+        cz = e1x * e2y - e1y * e2x
+        c2 = np.sqrt(cx * cx + cy * cy + cz * cz)
+        longest = max(
+            e1x * e1x + e1y * e1y + e1z * e1z,
+            max(e2x * e2x + e2y * e2y + e2z * e2z, e3x * e3x + e3y * e3y + e3z * e3z),
+        )
+        # Slivers (collinear or duplicate nodes): 2 * area / longest_edge**2 below min_quality.
+        if not (c2 > 1e-14) or c2 < min_quality * longest:
+            continue
+        inv = 1.0 / c2
+        nx = cx * inv
+        ny = cy * inv
+        nz = cz * inv
+        mx = (nodes[u, 0] + nodes[v, 0] + nodes[w, 0]) * third
+        my = (nodes[u, 1] + nodes[v, 1] + nodes[w, 1]) * third
+        mz = (nodes[u, 2] + nodes[v, 2] + nodes[w, 2]) * third
+        side = nx * (ox - mx) + ny * (oy - my) + nz * (oz - mz)
+        fi[nf, 0] = u
+        if (side > 0.0) if away else (side < 0.0):
+            nx = -nx
+            ny = -ny
+            nz = -nz
+            fi[nf, 1] = w
+            fi[nf, 2] = v
+        else:
+            fi[nf, 1] = v
+            fi[nf, 2] = w
+        fi[nf, 3] = cand[t, 3]
+        fi[nf, 4] = cand[t, 4]
+        fi[nf, 5] = cand[t, 5]
+        ff[nf, 0] = nx
+        ff[nf, 1] = ny
+        ff[nf, 2] = nz
+        ff[nf, 3] = mx
+        ff[nf, 4] = my
+        ff[nf, 5] = mz
+        ff[nf, 6] = 0.5 * c2
+        nf += 1
+
+    # Edge-to-facet table of the kept facets.
+    ecnt[:] = 0
+    eface = np.empty((ne, MAX_PER_EDGE), np.int32)
+    for f in range(nf):
+        for e in range(3):
+            eid = fi[f, 3 + e]
+            c = ecnt[eid]
+            if c < MAX_PER_EDGE:
+                eface[eid, c] = f
+            ecnt[eid] = c + 1
+    return fi, ff, nf, truncated, n_bad, ecnt, eface
 
 
 @njit(cache=True)
@@ -493,10 +536,11 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
         prm: (N_PARAMS,) float64 packed parameters (``P_*`` indices).
 
     Returns:
-        ``(n_bad, truncated, ground, facets, normals, flabels, lab, sboxes)``: out-of-range edge
-        count, capacity flag, ground level used (NaN without facets), (F, 3) int64 facets,
-        (F, 3) float64 unit normals, (F,) int64 labels, (K, N_LABEL_COLS) float64 label table
-        (``L_*`` columns), (S, 2, 3) float64 padded boxes of the suspected objects.
+        ``(n_bad, truncated, ground, facets, normals, flabels, lab, pos, normal, box, sboxes)``:
+        out-of-range edge count, capacity flag, ground level used (NaN without facets), (F, 3)
+        int64 facets, (F, 3) float64 unit normals, (F,) int64 labels, (K, N_LABEL_COLS) float64
+        label table (``L_*`` columns), (K, 3) positions, (K, 3) unit normals, (K, 2, 3) boxes,
+        (S, 2, 3) float64 padded boxes of the suspected objects.
     """
     n = nodes.shape[0]
     away = (mode & MODE_ORIENT_AWAY) != 0
@@ -643,7 +687,12 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
     # Final labels: connected facets of one group (each wall region its own wall), with the
     # per-label sums of §4.2.1 accumulated on the way.
     flabels = np.full(nf, -1, np.int64)
-    lab = np.zeros((nf1, N_LABEL_COLS))
+    # Every region lies in one label, so there are at most nreg labels.
+    nreg1 = max(nreg, 1)
+    lab = np.zeros((nreg1, N_LABEL_COLS))
+    lpos = np.empty((nreg1, 3))
+    lnormal = np.zeros((nreg1, 3))
+    lbox = np.empty((nreg1, 2, 3))
     stamp = np.full(n, -1, np.int64)
     nlab = 0
     nsus = 0
@@ -731,14 +780,14 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
                 stack[sp] = j
                 sp += 1
         lab[k, L_KIND] = gk
-        lab[k, L_POS] = px / count
-        lab[k, L_POS + 1] = py / count
-        lab[k, L_POS + 2] = pz / count
+        lpos[k, 0] = px / count
+        lpos[k, 1] = py / count
+        lpos[k, 2] = pz / count
         ns = np.sqrt(sx * sx + sy * sy + sz * sz)
         if ns > 1e-12:
-            lab[k, L_NORMAL] = sx / ns
-            lab[k, L_NORMAL + 1] = sy / ns
-            lab[k, L_NORMAL + 2] = sz / ns
+            lnormal[k, 0] = sx / ns
+            lnormal[k, 1] = sy / ns
+            lnormal[k, 2] = sz / ns
         lab[k, L_GAMMA] = _tilt(sx, sy, sz)
         lab[k, L_SIZE] = area
         lab[k, L_NNODES] = nn
@@ -751,12 +800,12 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
         else:
             lab[k, L_LENGTH] = af1 - af0
             lab[k, L_WIDTH] = al1 - al0
-        lab[k, L_BOX] = lox
-        lab[k, L_BOX + 1] = loy
-        lab[k, L_BOX + 2] = loz
-        lab[k, L_BOX + 3] = hix
-        lab[k, L_BOX + 4] = hiy
-        lab[k, L_BOX + 5] = hiz
+        lbox[k, 0, 0] = lox
+        lbox[k, 0, 1] = loy
+        lbox[k, 0, 2] = loz
+        lbox[k, 1, 0] = hix
+        lbox[k, 1, 1] = hiy
+        lbox[k, 1, 2] = hiz
         if gk == KIND_OBJECT and nn / area < prm[P_DENSITY]:
             lab[k, L_SUSPECTED] = 1.0
             nsus += 1
@@ -767,17 +816,20 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
     for k in range(nlab):
         if lab[k, L_SUSPECTED] != 0.0:
             for d in range(3):
-                sboxes[q, 0, d] = lab[k, L_BOX + d] - pad
-                sboxes[q, 1, d] = lab[k, L_BOX + 3 + d] + pad
+                sboxes[q, 0, d] = lbox[k, 0, d] - pad
+                sboxes[q, 1, d] = lbox[k, 1, d] + pad
             q += 1
     return (
         n_bad,
         truncated,
         ground,
-        fi[:nf, :3].copy(),
+        fi[:nf, :3].astype(np.int64),
         ff[:nf, :3].copy(),
         flabels,
-        lab[:nlab].copy(),
+        lab[:nlab],
+        lpos[:nlab],
+        lnormal[:nlab],
+        lbox[:nlab],
         sboxes,
     )
 
@@ -790,7 +842,7 @@ def triangulate_kernel(nodes, edges, origin, away, max_facets, min_quality):
     fi, ff, nf, _, n_bad, _, _ = triangulate_graph(
         nodes, edges, origin, away, max_facets, min_quality
     )
-    return fi[:nf, :3].copy(), ff[:nf, :3].copy(), n_bad
+    return fi[:nf, :3].astype(np.int64), ff[:nf, :3].copy(), n_bad
 
 
 @njit(cache=True)
@@ -811,7 +863,7 @@ def facet_weights_kernel(nodes, edges, origin, away, max_facets, min_quality):
             if nbr[f, e] >= 0:
                 # Eq. (2): w_ij = arccos(N_i . N_j / (|N_i| |N_j|)).
                 w[f, e] = np.arccos(min(1.0, max(-1.0, ncos[f, e])))
-    return fi[:nf, :3].copy(), ff[:nf, :3].copy(), nbr, w
+    return fi[:nf, :3].astype(np.int64), ff[:nf, :3].copy(), nbr, w
 
 
 @njit(cache=True)

@@ -43,7 +43,9 @@ class PipelineParams:
 
     def __post_init__(self):
         if self.gng not in GNG_KINDS:
-            raise ValueError(f"PipelineParams.gng must be one of {sorted(GNG_KINDS)}, got {self.gng!r}")
+            raise ValueError(
+                f"PipelineParams.gng must be one of {sorted(GNG_KINDS)}, got {self.gng!r}"
+            )
         if not self.hold >= 0:
             raise ValueError(f"PipelineParams.hold must be >= 0, got {self.hold}")
 

@@ -1,0 +1,144 @@
+"""Trial outcomes: the tally of Table 4, Wilson intervals, and the Table 5 failure analysis.
+
+Outcome classes (§6.5, SPEC §8; defined from MuJoCo contacts and positions in
+:mod:`neurocog_gym.envs.obstacle`):
+
+* ``success``: passed the obstacles and never touched them ("obstacle totally avoided").
+* ``touch``: passed and touched them ("avoided but touched").
+* ``fail``: fell, the physics became unstable, or not passed when the time limit ran out.
+
+The paper's counts (Table 4, a real robot, 50 trials each) are in :data:`PAPER_TABLE4`, its
+failure analysis (Table 5) in :data:`PAPER_TABLE5`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+
+import numpy as np
+
+OUTCOMES: tuple[str, ...] = ("success", "touch", "fail")
+SCENARIOS: tuple[str, ...] = ("sudden", "static")
+
+#: Table 4 (real robot): counts of success (never touched), success with touching, failed.
+PAPER_TABLE4: dict[str, dict[str, int]] = {
+    "sudden": {"trials": 50, "success": 28, "touch": 13, "fail": 9},
+    "static": {"trials": 50, "success": 23, "touch": 21, "fail": 6},
+}
+
+#: Table 5 (real robot, failure analysis): averages over the success and the failure cases.
+PAPER_TABLE5: dict[str, dict[str, float]] = {
+    "success": {"best": 0.92, "time_to_best": 0.45, "at_0_5": 0.92},
+    "fail": {"best": 0.89, "time_to_best": 0.75, "at_0_5": 0.48},
+}
+
+Z95 = 1.959963984540054
+"""Two-sided 95 % standard normal quantile."""
+
+
+def wilson_interval(k: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion ``k / n``.
+
+    Args:
+        k: successes, ``0 <= k <= n``.
+        n: trials; ``n == 0`` gives the uninformative interval (0, 1).
+        z: standard normal quantile (1.96 for 95 %).
+
+    Returns:
+        ``(low, high)``, both in [0, 1].
+    """
+    k, n = int(k), int(n)
+    if n < 0 or not 0 <= k <= max(n, 0):
+        raise ValueError(f"need 0 <= k <= n, got k={k}, n={n}")
+    if n == 0:
+        return 0.0, 1.0
+    z2 = z * z
+    centre = (k + z2 / 2) / (n + z2)
+    half = z * math.sqrt(k * (n - k) / n + z2 / 4) / (n + z2)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def tally(records: Iterable[Mapping]) -> dict:
+    """Count the outcomes of one scenario's trial records and add rates with 95 % Wilson intervals.
+
+    Args:
+        records: trial records, each with an ``outcome`` in :data:`OUTCOMES`.
+
+    Returns:
+        ``{"trials", "success", "touch", "fail", "success_rate", "success_or_touch_rate",
+        "fail_rate", "wilson95": {"success": [lo, hi], "success_or_touch": [...],
+        "fail": [...]}}``; rates are None when there are no trials.
+    """
+    counts = dict.fromkeys(OUTCOMES, 0)
+    for r in records:
+        o = r["outcome"]
+        if o not in counts:
+            raise ValueError(f"unknown outcome {o!r} (expected one of {OUTCOMES})")
+        counts[o] += 1
+    n = sum(counts.values())
+    passed = counts["success"] + counts["touch"]
+
+    def rate(k: int) -> float | None:
+        return k / n if n else None
+
+    return {
+        "trials": n,
+        **counts,
+        "success_rate": rate(counts["success"]),
+        "success_or_touch_rate": rate(passed),
+        "fail_rate": rate(counts["fail"]),
+        "wilson95": {
+            "success": list(wilson_interval(counts["success"], n)),
+            "success_or_touch": list(wilson_interval(passed, n)),
+            "fail": list(wilson_interval(counts["fail"], n)),
+        },
+    }
+
+
+def _mean(values: list) -> float | None:
+    v = [float(x) for x in values if x is not None and np.isfinite(x)]
+    return float(np.mean(v)) if v else None
+
+
+def failure_analysis(records: Iterable[Mapping]) -> dict:
+    """Table 5 quantities averaged over the passed (success or touch) and the failed trials.
+
+    Each record's ``similarity`` holds ``best`` (highest μ), ``time_to_best`` (s after the
+    obstacle appeared or came into view) and ``at_0_5`` (μ 0.5 s after it); missing values
+    (no similarity measured, trial ended before 0.5 s) are left out of the means.
+
+    Returns:
+        ``{"success": {"n", "best", "time_to_best", "at_0_5"}, "fail": {...}}`` where
+        ``success`` groups both passed outcomes as the paper's success case does; means are None
+        when no trial of the group has the value.
+    """
+    groups: dict[str, list[Mapping]] = {"success": [], "fail": []}
+    for r in records:
+        groups["fail" if r["outcome"] == "fail" else "success"].append(r.get("similarity") or {})
+    out = {}
+    for name, sims in groups.items():
+        out[name] = {
+            "n": len(sims),
+            "best": _mean([s.get("best") for s in sims]),
+            "time_to_best": _mean([s.get("time_to_best") for s in sims]),
+            "at_0_5": _mean([s.get("at_0_5") for s in sims]),
+        }
+    return out
+
+
+def scenario_summary(records: Iterable[Mapping]) -> dict:
+    """Everything ``summary.json`` says about one scenario: the tally plus means and Table 5."""
+    records = list(records)
+    out = tally(records)
+    passed = [r for r in records if r["outcome"] != "fail"]
+    out["mean_time_to_pass_s"] = _mean([r.get("time_to_pass") for r in passed])
+    out["mean_touch_events"] = _mean([r.get("touch_events") for r in records])
+    out["falls"] = sum(bool(r.get("fell")) for r in records)
+    out["sim_unstable"] = sum(bool(r.get("sim_unstable")) for r in records)
+    out["perception_ms_mean"] = _mean([(r.get("perception_ms") or {}).get("mean") for r in records])
+    out["perception_ms_max"] = max(
+        [(r.get("perception_ms") or {}).get("max") or 0.0 for r in records], default=None
+    )
+    out["failure_analysis"] = failure_analysis(records)
+    return out
