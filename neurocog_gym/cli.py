@@ -19,6 +19,16 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _nonneg_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
 def _nonneg_int(text: str) -> int:
     try:
         value = int(text)
@@ -50,6 +60,7 @@ def _cmd_tune_cpg(args) -> int:
         args.out, pop_size=args.pop_size, generations=args.generations,
         eval_seconds=args.eval_seconds, seed=args.seed, workers=args.workers,
         ray_address=args.ray_address, resume=args.resume, base_gait=args.base_gait,
+        max_drift=args.max_drift,
     )  # fmt: skip
     print(f"{res.generations} generations, {res.n_evals} evaluations in {res.elapsed_s:.0f} s; "
           f"chosen gait: speed error {res.best_F[0]:.3f} m/s, cost of transport "
@@ -146,6 +157,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue the run in --out")
     p.add_argument("--base-gait", default=None,
                    help="gait JSON whose genes are tuned (default: the shipped gait)")  # fmt: skip
+    p.add_argument("--max-drift", type=_nonneg_float, default=None,
+                   help="constraint: most lateral drift in m per 10 m forward (default 0 = off, "
+                   "Table 3's problem)")  # fmt: skip
     p.set_defaults(func=_cmd_tune_cpg)
 
     p = sub.add_parser("train-aef", help="motor babbling + backpropagation of the AEF network",

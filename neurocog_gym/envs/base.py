@@ -233,7 +233,8 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         unstable = self._sim_unstable()
         if unstable:
             # Physics fault: end the episode as truncated, never raise (reset is clean).
-            obs = {k: np.zeros(s.shape, s.dtype) for k, s in self.observation_space.items()}
+            obs = {k: np.int64(0) if isinstance(s, spaces.Discrete) else np.zeros(s.shape, s.dtype)
+                   for k, s in self.observation_space.items()}  # fmt: skip
             info = {"sim_unstable": True}
             return obs, 0.0, False, True, info
         dof = self.robot.dof_adr

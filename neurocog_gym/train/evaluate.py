@@ -27,6 +27,11 @@ Measures (our reading of §6.3, which names the objectives but not their formula
   pools' clipped activation would hide it as a bang-bang drive) at ``t_fall``; ``G = 0`` when it
   walks the whole ``T`` seconds. ``G <= 0`` is feasible, and among falling gaits the one that
   stays up longer has the smaller violation.
+
+Not objectives in Table 3, but measured over the same window (the optional ``--max-drift``
+constraint of the tuner uses the first): lateral drift, the torso's sideways (world y)
+displacement, also per 10 m forward (``10 |dy| / max(dx, min_speed * window)``), and heading
+change, the torso yaw at the end of the window minus at its start (unwrapped), rad.
 """
 
 from __future__ import annotations
@@ -108,6 +113,12 @@ class GaitScore:
     """True if the robot fell or the physics faulted before ``EvalParams.seconds``."""
     constraint: float
     """G, the fall constraint: 1 - t_fall / T, or 0 (feasible) if it never fell."""
+    lateral_drift: float = 0.0
+    """Sideways (world y) displacement of the torso over the window, m (+ is left)."""
+    drift_per_10m: float = 0.0
+    """|lateral drift| per 10 m forward, m (the forward distance floored as in the CoT)."""
+    heading_change: float = 0.0
+    """Torso yaw at the end of the window minus at its start, rad (+ is a left turn)."""
 
     @property
     def objectives(self) -> tuple[float, float]:
@@ -207,6 +218,11 @@ class GaitEvaluator:
         warm_steps = int(round(p.warmup / dt))
         xs = np.empty(self.n_steps + 1)
         xs[0] = d.qpos[0]
+        # y and the quaternion per cycle for the drift and heading measures (a copy costs ~1 us).
+        ys = np.empty(self.n_steps + 1)
+        ys[0] = d.qpos[1]
+        quats = np.empty((self.n_steps + 1, 4))
+        quats[0] = d.qpos[3:7]
         power = np.zeros(self.n_steps)
         fell_at = None
         k = 0
@@ -221,9 +237,11 @@ class GaitEvaluator:
                 status = 1  # the CPG diverged: the controller failed, as bad as a fall
             if status == 1:
                 fell_at = k * dt  # the faulty cycle counts as lost, like the env's truncation
-                xs[k + 1] = xs[k]
+                xs[k + 1], ys[k + 1], quats[k + 1] = xs[k], ys[k], quats[k]
                 break
             xs[k + 1] = d.qpos[0]
+            ys[k + 1] = d.qpos[1]
+            quats[k + 1] = d.qpos[3:7]
             if log is not None:
                 log["t"].append((k + 1) * dt)
                 log["cpg"].append(cpg.y.copy())
@@ -240,6 +258,11 @@ class GaitEvaluator:
         speed = distance / window
         cot = energy / (r.mass * _GRAVITY * max(distance, p.min_speed * window))
         lost = 0.0 if fell_at is None else 1.0 - fell_at / (self.n_steps * dt)
+        lateral = float(ys[n_done] - ys[start])
+        drift10 = 10.0 * abs(lateral) / max(distance, p.min_speed * window)
+        w, qx, qy, qz = quats[start : n_done + 1].T
+        yaw = np.unwrap(np.arctan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
+        heading = float(yaw[-1] - yaw[0]) if np.isfinite(yaw).all() else 0.0
         return GaitScore(
             speed=speed,
             speed_error=abs(speed - p.target_speed),
@@ -249,6 +272,9 @@ class GaitEvaluator:
             seconds=n_done * dt if fell_at is None else fell_at,
             fell=fell_at is not None,
             constraint=max(lost, 1e-9) if fell_at is not None else 0.0,
+            lateral_drift=lateral if np.isfinite(lateral) else 0.0,
+            drift_per_10m=float(drift10) if np.isfinite(drift10) else 1e6,
+            heading_change=heading,
         )
 
 
@@ -287,9 +313,14 @@ def _worker_init(base_gait: Gait, params: EvalParams, seed: int, local: bool = F
     _WORKER["seed"] = int(seed)
 
 
-def _worker_evaluate(genes: np.ndarray) -> tuple[float, float, float]:
-    """Pool task: ``(speed error, cost of transport, G)`` of one chromosome."""
+def _worker_evaluate(genes: np.ndarray) -> tuple[float, float, float, float]:
+    """Pool task: ``(speed error, cost of transport, G, drift per 10 m)`` of one chromosome."""
     if "evaluator" not in _WORKER:
         raise RuntimeError("evaluation worker was not initialised")
     s = _WORKER["evaluator"].evaluate(genes, _WORKER["seed"])
-    return (s.speed_error, s.cost_of_transport, s.constraint)
+    return score_row(s)
+
+
+def score_row(s: GaitScore) -> tuple[float, float, float, float]:
+    """What a pool returns per chromosome: speed error, CoT, fall G, drift per 10 m."""
+    return (s.speed_error, s.cost_of_transport, s.constraint, s.drift_per_10m)

@@ -2,8 +2,11 @@
 
 Search space: the 77 genes of ``chromosome.py`` within ``GENE_LOWER``/``GENE_UPPER``. Objectives
 (both minimised): speed error |v - 0.5 m/s| and cost of transport; falling is the inequality
-constraint G <= 0 (``evaluate.py`` gives the formulas). Only the genes are searched; the rest of
-the gait (synapses, posture, tau_f, motor constants) is the base gait's.
+constraint G <= 0 (``evaluate.py`` gives the formulas). Optional, off by default so that the
+problem stays Table 3's: ``max_drift`` (``--max-drift``) adds a second constraint, lateral drift
+per 10 m forward minus ``max_drift`` <= 0 (a gait that walks off sideways is infeasible). Only
+the genes are searched; the rest of the gait (synapses, posture, tau_f, motor constants) is the
+base gait's.
 
 Choices not fixed by the paper (SPEC §7 leaves them to us):
 
@@ -63,7 +66,13 @@ from neurocog_gym import io as nio
 from neurocog_gym import paths
 from neurocog_gym.locomotion.chromosome import GENE_LOWER, GENE_UPPER, N_GENES, gene_name
 from neurocog_gym.locomotion.gait import Gait, default_gait
-from neurocog_gym.train.evaluate import EvalParams, GaitEvaluator, _worker_evaluate, _worker_init
+from neurocog_gym.train.evaluate import (
+    EvalParams,
+    GaitEvaluator,
+    _worker_evaluate,
+    _worker_init,
+    score_row,
+)
 
 RUN_FORMAT = "neurocog-nsga-run/1"
 CHECKPOINT_FORMAT = "neurocog-nsga-checkpoint/1"
@@ -97,6 +106,8 @@ class NSGAConfig:
     """Standard deviation of those draws, as a fraction of each gene's range."""
     speed_tol: float = 0.01
     """Speed-error tolerance of the chosen-gait rule, m/s."""
+    max_drift: float = 0.0
+    """Most lateral drift per 10 m forward, m, as a second constraint; 0 is off (Table 3)."""
     seed: int = 0
     """Seed of the algorithm and of every evaluation."""
     eval: EvalParams = field(default_factory=EvalParams)
@@ -112,6 +123,8 @@ class NSGAConfig:
                 raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
         if self.seed < 0:
             raise ValueError(f"seed must be >= 0, got {self.seed}")
+        if not self.max_drift >= 0:
+            raise ValueError(f"max-drift must be >= 0 (0 = off), got {self.max_drift}")
 
     def to_json(self) -> dict:
         """JSON-ready dict."""
@@ -129,25 +142,32 @@ class NSGAConfig:
 
 
 class CPGProblem(Problem):
-    """The 77-gene CPG tuning problem: 2 objectives, 1 inequality constraint (falling).
+    """The 77-gene CPG tuning problem: 2 objectives, 1 or 2 inequality constraints.
 
+    The constraints are falling and, when ``max_drift`` > 0, lateral drift.
     ``_evaluate`` hands the whole population to ``mapper`` (a callable from a list of (77,)
-    chromosomes to a list of ``(speed error, cost of transport, G)``): a process pool, a Ray
-    pool, or, when None, this process. The mapper is not pickled with the problem.
+    chromosomes to a list of ``evaluate.score_row`` tuples: speed error, cost of transport, fall
+    G, drift per 10 m): a process pool, a Ray pool, or, when None, this process. The mapper is
+    not pickled with the problem.
 
     Args:
         base_gait: gait whose genes are replaced.
         eval_params: evaluation settings.
         seed: evaluation seed.
         mapper: parallel map over chromosomes, or None.
+        max_drift: most lateral drift per 10 m forward, m; 0 leaves the constraint out.
     """
 
-    def __init__(self, base_gait: Gait, eval_params: EvalParams, seed: int, mapper=None):
-        super().__init__(n_var=N_GENES, n_obj=2, n_ieq_constr=1, xl=GENE_LOWER, xu=GENE_UPPER)
+    def __init__(self, base_gait: Gait, eval_params: EvalParams, seed: int, mapper=None,
+                 max_drift: float = 0.0):  # fmt: skip
+        n_constr = 2 if max_drift > 0 else 1
+        super().__init__(n_var=N_GENES, n_obj=2, n_ieq_constr=n_constr, xl=GENE_LOWER,
+                         xu=GENE_UPPER)  # fmt: skip
         self.base_gait = base_gait
         self.eval_params = eval_params
         self.seed = int(seed)
         self.mapper = mapper
+        self.max_drift = float(max_drift)
         self._local: GaitEvaluator | None = None
 
     def __getstate__(self):
@@ -156,21 +176,21 @@ class CPGProblem(Problem):
         state["_local"] = None
         return state
 
-    def _map(self, rows: list[np.ndarray]) -> list[tuple[float, float, float]]:
+    def _map(self, rows: list[np.ndarray]) -> list[tuple[float, ...]]:
         if self.mapper is not None:
             return list(self.mapper(rows))
         if self._local is None:
             self._local = GaitEvaluator(self.base_gait, self.eval_params)
-        out = []
-        for x in rows:
-            s = self._local.evaluate(x, self.seed)
-            out.append((s.speed_error, s.cost_of_transport, s.constraint))
-        return out
+        return [score_row(self._local.evaluate(x, self.seed)) for x in rows]
 
     def _evaluate(self, X, out, *args, **kwargs):
         res = np.asarray(self._map([np.asarray(x, dtype=np.float64) for x in X]), dtype=np.float64)
         out["F"] = res[:, :2]
-        out["G"] = res[:, 2:3]
+        max_drift = getattr(self, "max_drift", 0.0)  # checkpoints from before the option
+        if max_drift > 0:
+            out["G"] = np.column_stack([res[:, 2], res[:, 3] - max_drift])
+        else:
+            out["G"] = res[:, 2:3]
 
 
 class BaseGaitSampling(Sampling):
@@ -316,11 +336,7 @@ class SerialPool:
 
     def __call__(self, rows):
         """Evaluate ``rows`` one after the other."""
-        out = []
-        for x in rows:
-            s = self._evaluator.evaluate(x, self._seed)
-            out.append((s.speed_error, s.cost_of_transport, s.constraint))
-        return out
+        return [score_row(self._evaluator.evaluate(x, self._seed)) for x in rows]
 
     def close(self) -> None:
         """Nothing to stop."""
@@ -532,7 +548,7 @@ def tune_cpg(
         algorithm.termination = MaximumGenerationTermination(config.generations)
         problem = algorithm.problem
     else:
-        problem = CPGProblem(base_gait, config.eval, config.seed)
+        problem = CPGProblem(base_gait, config.eval, config.seed, max_drift=config.max_drift)
         algorithm = make_algorithm(config, base_gait.genes_array)
         algorithm.setup(problem, termination=("n_gen", config.generations), seed=config.seed,
                         verbose=False)  # fmt: skip
@@ -610,7 +626,9 @@ def _finish(out, algorithm, config, base_gait, done, elapsed, plots) -> TuneResu
     nio.atomic_write_json(out / PARETO_FILE, {
         "generation": done,
         "objectives": ["speed_error_m_per_s", "cost_of_transport"],
-        "constraint": "G = 1 - t_fall / T (<= 0 feasible)",
+        "constraint": "G = 1 - t_fall / T (<= 0 feasible)" + (
+            f"; G2 = drift per 10 m - {config.max_drift} m (<= 0 feasible)"
+            if config.max_drift > 0 else ""),
         "gene_names": [gene_name(k) for k in range(N_GENES)],
         "F": front.get("F").tolist(),
         "G": front.get("G").tolist(),
@@ -638,6 +656,9 @@ def _finish(out, algorithm, config, base_gait, done, elapsed, plots) -> TuneResu
         seed=config.seed,
         eval_seconds=config.eval.seconds,
         base_gait=base_gait.name,
+        drift_per_10m=score.drift_per_10m,
+        heading_change_rad=score.heading_change,
+        **({"max_drift": config.max_drift} if config.max_drift > 0 else {}),
     )
     gait.save(out / BEST_GAIT_FILE)
     return TuneResult(out=out, generations=done, n_evals=int(algorithm.evaluator.n_eval),
@@ -656,6 +677,7 @@ def tune_cpg_cli(
     ray_address: str | None = None,
     resume: bool = False,
     base_gait: str | os.PathLike | None = None,
+    max_drift: float | None = None,
     progress: bool = True,
 ) -> TuneResult:
     """``neurocog tune-cpg``: :func:`tune_cpg` from command-line values (None = default).
@@ -668,7 +690,8 @@ def tune_cpg_cli(
     if resume:
         config, run_gait = read_run(out)
         given = {"pop-size": (pop_size, config.pop_size), "seed": (seed, config.seed),
-                 "eval-seconds": (eval_seconds, config.eval.seconds)}  # fmt: skip
+                 "eval-seconds": (eval_seconds, config.eval.seconds),
+                 "max-drift": (max_drift, config.max_drift)}  # fmt: skip
         for name, (value, stored) in given.items():
             if value is not None and value != stored:
                 raise ValueError(f"--{name} {value} differs from the run's {stored}; drop it "
@@ -682,6 +705,7 @@ def tune_cpg_cli(
         pop_size=defaults.pop_size if pop_size is None else pop_size,
         generations=defaults.generations if generations is None else generations,
         seed=defaults.seed if seed is None else seed,
+        max_drift=defaults.max_drift if max_drift is None else max_drift,
         eval=EvalParams(seconds=defaults.eval.seconds if eval_seconds is None else eval_seconds),
     )
     return tune_cpg(out, config, workers=workers, ray_address=ray_address, base_gait=gait,
