@@ -6,7 +6,17 @@ Errors in arguments or files exit non-zero with one line on stderr that says wha
 from __future__ import annotations
 
 import argparse
+import math
+import os
 import sys
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument error is one line on stderr (no usage block), with where to look."""
+
+    def error(self, message: str):
+        """Print ``prog: error: message; see prog --help`` and exit 2."""
+        self.exit(2, f"{self.prog}: error: {message}; see '{self.prog} --help'\n")
 
 
 def _positive_float(text: str) -> float:
@@ -14,8 +24,8 @@ def _positive_float(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
     return value
 
 
@@ -24,8 +34,8 @@ def _nonneg_float(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    if not (value >= 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
     return value
 
 
@@ -127,7 +137,7 @@ def _cmd_bench_report(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="neurocog",
         description="Neuro-cognitive quadruped locomotion with DD-GNG attention (Gymnasium/MuJoCo).",
     )
@@ -182,7 +192,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_nonneg_int, default=0,
                    help="run seed (trial seeds derive from seed, scenario, i)")  # fmt: skip
     p.add_argument("--policy", default="aef",
-                   help="aef, blind, or a saved stable-baselines3 model (.zip)")  # fmt: skip
+                   help="aef, blind, AEF weights (.npz) or a stable-baselines3 model "
+                   "(.zip)")  # fmt: skip
     p.add_argument("--attention", choices=("on", "off"), default="on",
                    help="off: plain GNG instead of DD-GNG attention (the ablation)")  # fmt: skip
     p.add_argument("--max-seconds", type=_positive_float, default=None,
@@ -213,9 +224,20 @@ def main(argv: list[str] | None = None) -> int:
         print("neurocog: interrupted", file=sys.stderr)
         return 130
     except (ValueError, FileNotFoundError, KeyError, OSError, RuntimeError) as e:
-        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        if isinstance(e, OSError) and e.filename and e.strerror:
+            msg = f"cannot use {e.filename}: {e.strerror}"
+        else:
+            msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         print(f"neurocog {args.command}: error: {msg}", file=sys.stderr)
         return 2
+    except Exception as e:  # a bug, not a user error: still one line unless asked for more
+        if os.environ.get("NEUROCOG_DEBUG"):
+            raise
+        text = str(e).strip().splitlines()[0] if str(e).strip() else ""
+        print(f"neurocog {args.command}: internal error: {type(e).__name__}: {text} (set "
+              "NEUROCOG_DEBUG=1 for the traceback and please report it)",
+              file=sys.stderr)  # fmt: skip
+        return 3
 
 
 if __name__ == "__main__":

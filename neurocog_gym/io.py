@@ -61,5 +61,8 @@ def read_jsonl(path: str | os.PathLike) -> list[dict]:
         except json.JSONDecodeError:
             if i == len(lines) - 1:
                 break
-            raise ValueError(f"{path}: line {i + 1} is not valid JSON") from None
+            raise ValueError(
+                f"{path}: line {i + 1} is not valid JSON (the file was damaged or edited: "
+                "restore it, or start again in another folder)"
+            ) from None
     return out

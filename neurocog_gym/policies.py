@@ -96,9 +96,11 @@ def _load_sb3(path: Path):
 
 
 def make_policy(spec: str):
-    """``"aef"``, ``"blind"`` or the path of a saved stable-baselines3 model."""
+    """``"aef"``, ``"blind"``, an AEF weights file (``.npz``) or a stable-baselines3 model."""
     if spec == "aef":
         return AEFPolicy()
     if spec == "blind":
         return BlindPolicy()
+    if spec.endswith(".npz"):
+        return AEFPolicy(weights=spec)
     return SB3Policy(spec)

@@ -102,9 +102,16 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
     data_path = out / "babbling.npz"
     babble = None
     if data_path.exists():
-        with np.load(data_path) as z:
-            babble = {k: z[k] for k in z.files}
-        if len(babble["command"]) != cfg.samples:
+        try:
+            with np.load(data_path) as z:
+                babble = {k: z[k] for k in z.files}
+            n_recorded = len(babble["command"])
+        except Exception as e:  # zip, pickle or key errors of a damaged file
+            raise ValueError(
+                f"babbling data {data_path} is unreadable or corrupt ({_first_line(e)}); delete "
+                "it to record it again, or choose another --out"
+            ) from None
+        if n_recorded != cfg.samples:
             babble = None
     if babble is None:
         babble = record_babbling(cfg.samples, seed=cfg.seed, progress=progress)
@@ -139,7 +146,15 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
     ckpt = out / "checkpoint.pt"
     state = {"epoch": 0, "best": np.inf, "best_epoch": 0, "history": [], "bad": 0}
     if ckpt.exists():
-        saved = torch.load(ckpt, weights_only=False)
+        try:
+            saved = torch.load(ckpt, weights_only=False)
+            if not isinstance(saved, dict):
+                raise ValueError("not a train-aef checkpoint")
+        except Exception as e:  # torch, zip and pickle errors of a damaged file
+            raise ValueError(
+                f"checkpoint {ckpt} is unreadable or corrupt ({_first_line(e)}); delete it to "
+                "train from epoch 0, or choose another --out"
+            ) from None
         if saved.get("config") == asdict(cfg):
             net.load_state_dict(saved["net"])
             opt.load_state_dict(saved["opt"])
@@ -194,6 +209,11 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
     }
     nio.atomic_write_json(out / "metrics.json", metrics)
     return metrics
+
+
+def _first_line(e: BaseException) -> str:
+    text = str(e).strip()
+    return text.splitlines()[0] if text else type(e).__name__
 
 
 def plot_babbling(babble: dict[str, np.ndarray], path: Path, leg: int = 0, n: int = 400) -> None:

@@ -89,6 +89,9 @@ class EvalParams:
         for name in ("warmup", "reset_noise_scale", "cpg_noise"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"EvalParams.{name} must be >= 0, got {getattr(self, name)}")
+        for name in ("seconds", "dt", "warmup"):
+            if not np.isfinite(getattr(self, name)):
+                raise ValueError(f"EvalParams.{name} must be finite, got {getattr(self, name)}")
         if self.seconds < self.dt:
             raise ValueError(f"evaluation of {self.seconds} s is shorter than one cycle {self.dt}")
 
