@@ -87,11 +87,13 @@ def _cmd_train_aef(args) -> int:
     print(f"val_loss {m['val_loss']:.4f} vs mean predictor {m['baseline_val_loss']:.4f} "
           f"(ratio {m['ratio']:.2f}); weights: {args.out}/aef_weights.npz")  # fmt: skip
     if args.export:
-        import shutil
+        from pathlib import Path
 
+        from neurocog_gym import io as nio
         from neurocog_gym import paths
 
-        shutil.copyfile(f"{args.out}/aef_weights.npz", paths.assets_dir() / paths.AEF_WEIGHTS)
+        weights = Path(args.out) / "aef_weights.npz"
+        nio.atomic_write_bytes(paths.assets_dir() / paths.AEF_WEIGHTS, weights.read_bytes())
         print(f"exported to {paths.assets_dir() / paths.AEF_WEIGHTS}")
     return 0
 

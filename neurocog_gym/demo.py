@@ -66,7 +66,8 @@ def walk_demo(
     if frames:
         import imageio.v2 as imageio
 
-        imageio.mimsave(out / "walk.mp4", frames, fps=fps, macro_block_size=1)
+        with nio.atomic_path(out / "walk.mp4") as tmp:
+            imageio.mimsave(tmp, frames, fps=fps, macro_block_size=1)
         summary["video"] = str(out / "walk.mp4")
     plot_gait(t, np.asarray(log["foot_z"]), np.asarray(log["touch"]), np.asarray(log["hip"]),
               np.asarray(log["cpg"]), out / "gait.png")  # fmt: skip
@@ -100,5 +101,5 @@ def plot_gait(t, foot_z, touch, hip, cpg, path: Path, window: float = 3.0) -> No
     axes[3].set_xlabel("time (s)")
     fig.suptitle("NeuroCog/Walk-v0 — default gait")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    nio.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)

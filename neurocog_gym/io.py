@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io as _io
 import json
 import os
 import tempfile
@@ -33,6 +35,39 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
 def atomic_write_json(path: str | os.PathLike, obj) -> None:
     """Write ``obj`` as indented JSON, atomically."""
     atomic_write_text(path, json.dumps(obj, indent=1, sort_keys=False) + "\n")
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike):
+    """A temp path beside ``path``, renamed over it when the block succeeds, removed if not.
+
+    For writers that want a file name (video encoders, third-party savers); same suffix.
+
+    Example: ``with atomic_path(out / "walk.mp4") as tmp: imageio.mimsave(tmp, frames)``.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(
+        dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}"
+    )
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        with open(tmp, "rb") as f:
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_savefig(fig, path: str | os.PathLike, **kwargs) -> None:
+    """``fig.savefig`` into memory, then :func:`atomic_write_bytes` (format from the suffix)."""
+    buf = _io.BytesIO()
+    fmt = Path(path).suffix.lstrip(".") or "png"
+    fig.savefig(buf, format=fmt, **kwargs)
+    atomic_write_bytes(path, buf.getvalue())
 
 
 def append_jsonl(path: str | os.PathLike, record: dict) -> None:

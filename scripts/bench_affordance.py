@@ -195,7 +195,9 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(text)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text)
+    from neurocog_gym.io import atomic_write_text
+
+    atomic_write_text(args.out, text)
 
 
 if __name__ == "__main__":

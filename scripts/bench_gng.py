@@ -327,7 +327,9 @@ def main(args: Args) -> str:
     print(text)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
+    from neurocog_gym.io import atomic_write_text
+
+    atomic_write_text(out, text)
     return text
 
 

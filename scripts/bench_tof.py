@@ -351,7 +351,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.out:
         out = Path(args.out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(report)
+        from neurocog_gym.io import atomic_write_text
+
+        atomic_write_text(out, report)
     return 0
 
 

@@ -30,7 +30,9 @@ def main() -> None:
     lines.append("")
     for p in parts:
         lines += [f'<a id="{p.stem}"></a>', "", p.read_text().rstrip(), "", "---", ""]
-    (docs / "benchmarks.md").write_text("\n".join(lines))
+    from neurocog_gym.io import atomic_write_text
+
+    atomic_write_text(docs / "benchmarks.md", "\n".join(lines))
     print(f"wrote {docs / 'benchmarks.md'} from {len(parts)} sections")
 
 

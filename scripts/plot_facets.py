@@ -108,7 +108,9 @@ def main(argv: list[str] | None = None) -> None:
     fig.suptitle("Affordance facets on a GNG-like graph (floor, 7 cm block, wall)")
     fig.tight_layout(rect=(0, 0.05, 1, 0.97))
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(args.out, dpi=130)
+    from neurocog_gym.io import atomic_savefig
+
+    atomic_savefig(fig, args.out, dpi=130)
     print(f"wrote {args.out}")
 
 

@@ -42,7 +42,10 @@ def main() -> None:
     for _ in range(args.steps):
         env.step(np.zeros(15, np.float32))
     os.makedirs(os.path.dirname(args.out) or ".", exist_ok=True)
-    imageio.imwrite(args.out, env.render())
+    from neurocog_gym.io import atomic_path
+
+    with atomic_path(args.out) as tmp:
+        imageio.imwrite(tmp, env.render())
     print(f"wrote {args.out}")
 
 

@@ -215,7 +215,7 @@ def plot_outcomes(runs: list[Run], path: Path) -> Path:
         ax.set_title(f"{s} obstacle")
     fig.legend(*axes[0][0].get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=8)
     fig.tight_layout(rect=(0, 0.12, 1, 1))
-    fig.savefig(path, dpi=110)
+    io.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
     return path
 
@@ -265,7 +265,7 @@ def plot_similarity(runs: list[Run], path: Path, window: float = 2.0) -> Path:
                 ax.set_ylabel("similarity μ (Eq. 16)")
             ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    io.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
     return path
 
@@ -298,7 +298,7 @@ def plot_timeline(run: Run, path: Path) -> Path:
     handles = [plt.Rectangle((0, 0), 1, 1, color=COLOURS[o], alpha=0.55) for o in OUTCOMES]
     ax.legend(handles, OUTCOMES, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1))
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    io.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
     return path
 

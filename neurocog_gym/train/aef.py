@@ -145,6 +145,7 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
 
     ckpt = out / "checkpoint.pt"
     state = {"epoch": 0, "best": np.inf, "best_epoch": 0, "history": [], "bad": 0}
+    perm_rng = None
     if ckpt.exists():
         try:
             saved = torch.load(ckpt, weights_only=False)
@@ -160,7 +161,11 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
             opt.load_state_dict(saved["opt"])
             state = saved["state"]
             torch.set_rng_state(saved["torch_rng"])
+            perm_rng = saved.get("perm_rng")
     gen = torch.Generator().manual_seed(cfg.seed + state["epoch"])
+    if perm_rng is not None:
+        # The batch order goes on where it stopped: a resumed run is the uninterrupted one.
+        gen.set_state(perm_rng)
     bar = tqdm(range(state["epoch"], cfg.epochs), desc="train-aef", unit="epoch", disable=not progress or None)
     best_weights = out / "aef_weights.npz"
     for epoch in bar:
@@ -190,7 +195,8 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
 
         buf = io.BytesIO()
         torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "state": state,
-                    "config": asdict(cfg), "torch_rng": torch.get_rng_state()}, buf)  # fmt: skip
+                    "config": asdict(cfg), "torch_rng": torch.get_rng_state(),
+                    "perm_rng": gen.get_state()}, buf)  # fmt: skip
         nio.atomic_write_bytes(ckpt, buf.getvalue())
     best = state["history"][state["best_epoch"] - 1] if state["best_epoch"] else state["history"][-1]
     metrics = {
@@ -237,7 +243,7 @@ def plot_babbling(babble: dict[str, np.ndarray], path: Path, leg: int = 0, n: in
     ax.set_title("Motor babbling, FL foot (Fig. 15)")
     ax.set_aspect("equal")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    nio.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
 
 

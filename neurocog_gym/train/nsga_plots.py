@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from neurocog_gym import io as nio
 from neurocog_gym.robot.names import LEGS
 
 # Fig. 14 rows: the six neurons of a leg (chromosome.py's numbering, 1-based in Fig. 12).
@@ -62,7 +63,7 @@ def plot_fitness_history(history: list[dict], path: str | Path) -> None:
     axes[0, 1].set_title("(b) population average")
     fig.suptitle("NSGA-II fitness over generations (Fig. 13)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    nio.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -90,5 +91,5 @@ def plot_cpg_outputs(trace: dict, path: str | Path, window: float = 3.0) -> None
                 ax.set_xlabel("time (s)")
     fig.suptitle("CPG neuron outputs y_i of the chosen gait (Fig. 14)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    nio.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)

@@ -101,12 +101,16 @@ CASES = [
     (["tune-cpg", "--base-gait", "{d}", "--out", "{d}/x"], ["Is a directory"]),
     # tune-cpg: run folders and checkpoints
     (["tune-cpg", "--out", "{d}/empty", "--resume"], ["no run to resume"]),
-    (["tune-cpg", "--out", "{d}/nsga_ckpt", "--resume", "--workers", "1"],
-     ["checkpoint", "corrupt"]),
+    (
+        ["tune-cpg", "--out", "{d}/nsga_ckpt", "--resume", "--workers", "1"],
+        ["checkpoint", "corrupt"],
+    ),
     (["tune-cpg", "--out", "{d}/nsga_pickle", "--resume", "--workers", "1"], ["checkpoint"]),
     (["tune-cpg", "--out", "{d}/nsga_runjson", "--resume"], ["run.json", "corrupt"]),
-    (["tune-cpg", "--out", "{d}/nsga_hist", "--resume", "--workers", "1", "--generations", "2"],
-     ["history.jsonl", "not valid JSON", "restore it"]),
+    (
+        ["tune-cpg", "--out", "{d}/nsga_hist", "--resume", "--workers", "1", "--generations", "2"],
+        ["history.jsonl", "not valid JSON", "restore it"],
+    ),
     (["tune-cpg", "--out", "{d}/nsga_run", "--pop-size", "4"], ["already holds a run", "--resume"]),
     (["tune-cpg", "--out", "{d}/nsga_run", "--resume", "--seed", "9"], ["--seed 9 differs"]),
     (["tune-cpg", "--out", "{d}/nsga_run", "--resume", "--generations", "0"], ["cannot cut"]),
@@ -116,14 +120,22 @@ CASES = [
     (["train-aef", "--samples", "10", "--out", "{d}/x"], ["at least 100"]),
     (["train-aef", "--epochs", "0", "--samples", "200", "--out", "{d}/x"], ["at least 1"]),
     (["train-aef", "--epochs", "x"], ["--epochs"]),
-    (["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_babble"],
-     ["babbling.npz", "corrupt", "delete it"]),
-    (["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_babble2"],
-     ["babbling.npz", "corrupt"]),
-    (["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_ckpt_zip"],
-     ["checkpoint.pt", "corrupt", "delete it"]),
-    (["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_ckpt_pickle"],
-     ["checkpoint.pt", "corrupt"]),
+    (
+        ["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_babble"],
+        ["babbling.npz", "corrupt", "delete it"],
+    ),
+    (
+        ["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_babble2"],
+        ["babbling.npz", "corrupt"],
+    ),
+    (
+        ["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_ckpt_zip"],
+        ["checkpoint.pt", "corrupt", "delete it"],
+    ),
+    (
+        ["train-aef", "--samples", "200", "--epochs", "1", "--out", "{d}/aef_ckpt_pickle"],
+        ["checkpoint.pt", "corrupt"],
+    ),
     # bench
     (["bench", "--trials", "-3"], ["--trials", ">= 1"]),
     (["bench", "--trials", "0"], ["--trials", ">= 1"]),
@@ -141,8 +153,10 @@ CASES = [
     (["bench", "--policy", "{d}/garbage.npz", "--out", "{d}/x"], ["AEF weights", "corrupt"]),
     (["bench", "--policy", "{d}/truncated.npz", "--out", "{d}/x"], ["AEF weights", "corrupt"]),
     (["bench", "--policy", "{d}/wrong_keys.npz", "--out", "{d}/x"], ["AEF weights", "lacks"]),
-    (["bench", "--out", "{d}/bench_bad", "--resume", "--trials", "1", "--workers", "1"],
-     ["trials.jsonl", "line 2", "not valid JSON"]),
+    (
+        ["bench", "--out", "{d}/bench_bad", "--resume", "--trials", "1", "--workers", "1"],
+        ["trials.jsonl", "line 2", "not valid JSON"],
+    ),
     # bench-report
     (["bench-report", "{d}/nonexistent"], ["does not exist"]),
     (["bench-report", "{d}/empty"], ["no trials.jsonl"]),
