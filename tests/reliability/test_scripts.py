@@ -1,0 +1,44 @@
+"""The soak and NSGA-candidate scripts end to end on tiny budgets (subprocess)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _script(name, *args, timeout=300):
+    res = subprocess.run([sys.executable, str(ROOT / "scripts" / name), *map(str, args)],
+                         capture_output=True, text=True, timeout=timeout, cwd=ROOT)  # fmt: skip
+    assert res.returncode == 0, res.stderr[-2000:]
+    return res
+
+
+def test_soak_script_and_report(tmp_path):
+    js = tmp_path / "walk.json"
+    _script("soak.py", "--env", "NeuroCog/Walk-v0", "--steps", "1500", "--warmup", "500",
+            "--sample-every", "250", "--episode-steps", "400", "--json", js)  # fmt: skip
+    r = json.loads(js.read_text())
+    assert r["steps"] == 1500 and r["episodes"] >= 4 and r["nonfinite_obs_steps"] == 0
+    assert len(r["samples"]) == 6 and r["rss_warm_mib"] > 0
+    md = tmp_path / "soak.md"
+    _script("soak.py", "--report", js, "--out", md)
+    text = md.read_text()
+    assert "| NeuroCog/Walk-v0 | 1,500 (1,500) |" in text and "growth" in text
+
+
+def test_nsga_candidates_script(tmp_path):
+    from neurocog_gym.train.evaluate import EvalParams
+    from neurocog_gym.train.nsga import NSGAConfig, tune_cpg
+
+    run = tmp_path / "run"
+    cfg = NSGAConfig(pop_size=4, generations=1, seed=0, eval=EvalParams(seconds=0.3))
+    tune_cpg(run, cfg, workers=1, plots=False, progress=False)
+    _script("nsga_candidates.py", run, "--seconds", "2.5", "--seeds", "0", "1",
+            "--env-check", "1")  # fmt: skip
+    c = json.loads((run / "candidates.json").read_text())
+    assert c["n_solutions"] >= 1 and len(c["table"]) == c["n_solutions"]
+    assert c["reference_env"] and all("drift_per_10m" in r for r in c["reference_env"])
+    # A candidate is written only when one meets every rule; never over the shipped default.
+    assert (run / "candidate_gait.json").exists() == (c["winner"] is not None)
