@@ -48,7 +48,8 @@ P_GROUND_TOL = 7
 P_GROUND_SHARE = 8
 P_DENSITY = 9
 P_PADDING = 10
-N_PARAMS = 11
+P_RAISE_TOL = 11
+N_PARAMS = 12
 
 # Label table columns (one row per label; positions, normals and boxes are separate arrays).
 L_KIND = 0
@@ -646,10 +647,21 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
     # tolerance is terrain, one touching a wall belongs to that wall (the bevel at its foot).
     group = np.empty(nf1, np.int64)
     wall_of = np.full(nf1, -1, np.int64)
+    raise_tol = prm[P_RAISE_TOL]
+    n_raised = 0
     for f in range(nf):
         group[f] = rkind[region[f]]
         if group[f] == KIND_WALL:
             wall_of[f] = region[f]
+        elif group[f] == KIND_TERRAIN and raise_tol > 0.0:
+            # Non-homogeneous nodes (§6.2, §4.1): a terrain facet with a node standing more
+            # than raise_tol above the ground is part of a suspected object, even while the
+            # sparse net's facets round it are still too flat to leave the floor's region.
+            for c in range(3):
+                if nodes[fi[f, c], 2] - ground > raise_tol:
+                    group[f] = KIND_OBJECT
+                    n_raised += 1
+                    break
     seen = np.zeros(nf1, np.bool_)
     for s in range(nf):
         if group[s] != KIND_OBJECT or seen[s]:
@@ -687,8 +699,10 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
     # Final labels: connected facets of one group (each wall region its own wall), with the
     # per-label sums of §4.2.1 accumulated on the way.
     flabels = np.full(nf, -1, np.int64)
-    # Every region lies in one label, so there are at most nreg labels.
-    nreg1 = max(nreg, 1)
+    # Whole regions change group, so a label is a union of regions, except where facets were
+    # taken out of a terrain region for a raised node: each such facet adds at most two labels
+    # (itself, and the piece of terrain it cuts off).
+    nreg1 = max(nreg + 2 * n_raised, 1)
     lab = np.zeros((nreg1, N_LABEL_COLS))
     lpos = np.empty((nreg1, 3))
     lnormal = np.zeros((nreg1, 3))
@@ -983,3 +997,153 @@ def match_surface_kernel(att_p, att_n, ref_p, ref_n, radius, cos_gate, e_pos, e_
     if nm == 0:
         return np.nan, np.nan, 0
     return s_sum / nm, t_sum / nm, nm
+
+
+@njit(cache=True)
+def refine_objects_kernel(
+    points, boxes, ground, tol, margin, fx, fy, iters, q_lo, q_top, gap, origin, nbins, umax
+):
+    """Object sizes from the raw frame points round each object (pipeline ``refine``).
+
+    The paper's "raw data around the suspected obstacle" (Algorithm 1, §4.1). The frame's
+    points higher than ``tol`` above ``ground`` are gathered once; for each object
+    box, those within ``margin`` of its ground-plane extent (in the walking frame) are taken,
+    the extent is reset to their ``q_lo``..``1 - q_lo`` quantiles along and across the walking
+    direction, and this repeats ``iters`` times, so the extent grows over an obstacle the graph
+    only partly covers and stops at its edge (floor points are never gathered).
+
+    Args:
+        points: (N, 3) float32 or float64, metres, the frame.
+        boxes: (K, 2, 3) float64 object boxes (min/max corners of their nodes), metres.
+        ground: metres, the ground level.
+        tol: metres, points higher than ground + tol count as obstacle surface.
+        margin: metres, search margin round the current extent.
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        iters: growing iterations (≥ 1).
+        q_lo: quantile of the extent's ends (robust to stray points), e.g. 0.01.
+        q_top: quantile of the height, e.g. 0.9 (most surface points of a block are on its top).
+        gap: metres; after the quantile cut, an end point farther than this from the next
+            point inwards is dropped, and so on (isolated stray points: range noise).
+        origin: (3,) float64, metres, the sensors' position.
+        nbins: azimuth bins of the view's upper edge.
+        umax: the bins cover tan(azimuth) in [-umax, umax] about the walking direction.
+
+    Returns:
+        (K, 9) float64: points used, height above ground, width (across), length (along), then
+        the extent as along-min, along-max, across-min, across-max, and the smallest distance
+        (in tan(elevation) seen from ``origin``) of an object point below the upper edge of the
+        view in its azimuth bin: near 0 when the view cuts the surface off (a wall whose top is
+        out of sight). A row with 0 points is left at NaN.
+    """
+    n = points.shape[0]
+    k_n = boxes.shape[0]
+    out = np.full((k_n, 9), np.nan)
+    thr = ground + tol
+    hz = np.empty(n)
+    hf = np.empty(n)
+    hl = np.empty(n)
+    hs = np.empty(n)
+    hb = np.empty(n, np.int64)
+    edge = np.full(nbins, -np.inf)
+    of = origin[0] * fx + origin[1] * fy
+    ol = origin[1] * fx - origin[0] * fy
+    oz = origin[2]
+    scale = nbins / (2.0 * umax)
+    m = 0
+    for i in range(n):
+        x = points[i, 0]
+        y = points[i, 1]
+        z = points[i, 2]
+        pf = x * fx + y * fy
+        pl = y * fx - x * fy
+        df = pf - of
+        dl = pl - ol
+        if not (df > 1e-6 and abs(z) < 1e4):
+            continue
+        slope = (z - oz) / np.sqrt(df * df + dl * dl)
+        b = int((dl / df + umax) * scale)
+        b = min(max(b, 0), nbins - 1)
+        if slope > edge[b]:
+            edge[b] = slope
+        if z > thr:
+            hz[m] = z
+            hf[m] = pf
+            hl[m] = pl
+            hs[m] = slope
+            hb[m] = b
+            m += 1
+    bz = np.empty(max(m, 1))
+    bf = np.empty(max(m, 1))
+    bl = np.empty(max(m, 1))
+    bg = np.empty(max(m, 1))
+    for k in range(k_n):
+        # The box's ground-plane corners in the walking frame.
+        f0 = np.inf
+        f1 = -np.inf
+        l0 = np.inf
+        l1 = -np.inf
+        for a in range(2):
+            for b in range(2):
+                x = boxes[k, a, 0]
+                y = boxes[k, b, 1]
+                pf = x * fx + y * fy
+                pl = y * fx - x * fy
+                f0 = min(f0, pf)
+                f1 = max(f1, pf)
+                l0 = min(l0, pl)
+                l1 = max(l1, pl)
+        cnt = 0
+        for _ in range(iters):
+            cnt = 0
+            for i in range(m):
+                if (
+                    hf[i] >= f0 - margin
+                    and hf[i] <= f1 + margin
+                    and hl[i] >= l0 - margin
+                    and hl[i] <= l1 + margin
+                ):
+                    bz[cnt] = hz[i]
+                    bf[cnt] = hf[i]
+                    bl[cnt] = hl[i]
+                    bg[cnt] = edge[hb[i]] - hs[i]
+                    cnt += 1
+            if cnt == 0:
+                break
+            sf = np.sort(bf[:cnt])
+            sl = np.sort(bl[:cnt])
+            lo = int(q_lo * (cnt - 1))
+            hi = cnt - 1 - lo
+            a = lo
+            b = hi
+            while a < b and sf[a + 1] - sf[a] > gap:
+                a += 1
+            while b > a and sf[b] - sf[b - 1] > gap:
+                b -= 1
+            nf0, nf1 = sf[a], sf[b]
+            a = lo
+            b = hi
+            while a < b and sl[a + 1] - sl[a] > gap:
+                a += 1
+            while b > a and sl[b] - sl[b - 1] > gap:
+                b -= 1
+            nl0, nl1 = sl[a], sl[b]
+            if nf0 == f0 and nf1 == f1 and nl0 == l0 and nl1 == l1:
+                break
+            f0, f1, l0, l1 = nf0, nf1, nl0, nl1
+        if cnt == 0:
+            continue
+        sz = np.sort(bz[:cnt])
+        out[k, 0] = cnt
+        out[k, 1] = sz[int(q_top * (cnt - 1))] - ground
+        out[k, 2] = l1 - l0
+        out[k, 3] = f1 - f0
+        out[k, 4] = f0
+        out[k, 5] = f1
+        out[k, 6] = l0
+        out[k, 7] = l1
+        gmin = np.inf
+        for i in range(cnt):
+            gmin = min(gmin, bg[i])
+        out[k, 8] = gmin
+    return out

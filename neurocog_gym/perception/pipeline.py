@@ -1,4 +1,4 @@
-"""The attention loop as one object (§4, Fig. 1, Algorithm 1):
+"""The attention loop as one object (§4, Fig. 1, Algorithm 1).
 
     point cloud -> DD-GNG -> affordance detection -> suspected boxes -> DD-GNG (next cycle)
 
@@ -13,15 +13,35 @@ attention as soon as its density crossed v, its nodes would lose their strength,
 would fall below v again, and the attention would flicker. Boxes that overlap are merged into
 the newest one. The same memory is the robot's short-term knowledge of obstacles it can no
 longer see (under its body), which the effectivity uses for the hind legs.
+
+Raw points round each object (``refine``, on by default; §4.1: "the raw data around the
+suspected obstacle are processed separately"). The graph finds objects and says how sure it is
+(density, ``suspected``); each object's height, width, length and box are then measured on the
+frame's own points above the ground round it (``refine_objects_kernel``: gathered within
+``refine_margin`` of the object, grown until stable, isolated stray points dropped, half a point
+spacing added at each end). A GNG's nodes sit inside the surface they quantise, so node extents
+fall short of a block's edges by about half a node spacing each side — 10–13 cm short on the
+sparse nets of Table 2 (``scripts/bench_affordance_accuracy.py``). Two checks ride on it:
+
+* ``verify``: an object without a single raw point above the ground tolerance round it is a
+  graph artefact (a node behind a new block, pulled up by the points on its top) and is
+  relabelled terrain, so it is never attended.
+* ``view_cut``: an object whose highest points touch the upper edge of the view (the largest
+  elevation seen from the sensors in their azimuth) is the foot of something taller whose top
+  is out of sight — a wall seen by sensors pitched 45° down — and is relabelled wall.
+
+``timings`` has a ``"refine"`` entry for this step (0 when there is no object).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from neurocog_gym.perception import _affordance_kernels as _k
 from neurocog_gym.perception.affordance import AffordanceParams, Affordances, detect_affordances
 from neurocog_gym.perception.gng import DDGNG, GNG, MLGNG, DDGNGParams
 
@@ -40,6 +60,29 @@ class PipelineParams:
     """Most boxes kept in memory (oldest dropped first)."""
     min_height: float = 0.025
     """m: objects lower than this are ignored (GNG ripples on a flat floor)."""
+    refine: bool = True
+    """Measure each object's height, width and length on the frame's raw points round it."""
+    verify: bool = True
+    """With ``refine``: an object without a single raw point higher than the ground tolerance
+    within ``refine_margin`` of it is relabelled terrain (never attended, never reported)."""
+    view_cut: float = 0.02
+    """With ``refine``: an object whose highest raw points lie within this (tan of the elevation
+    angle, ≈ 1.1°) of the view's upper edge in their azimuth is cut off by the field of view and
+    relabelled wall (its top is out of sight); < 0 switches the rule off."""
+    refine_margin: float = 0.04
+    """m: search margin round an object's extent when gathering its raw points."""
+    refine_iters: int = 10
+    """Growing iterations of the raw-point extent (see ``refine_objects_kernel``)."""
+    refine_min_points: int = 8
+    """Objects with fewer raw points round them keep the graph's measures."""
+    refine_quantile: float = 0.0
+    """Share of the raw points cut off at each end of an extent (0: keep them all)."""
+    refine_gap: float = 0.03
+    """m: an extent's end point farther than this from the next point inwards is a stray
+    point (range noise) and dropped, repeatedly."""
+    refine_edge: float = 1.0
+    """Edge correction: each end of an extent moves out by this × half the mean raw-point
+    spacing on the object, sqrt(footprint / points); 0 = off."""
 
     def __post_init__(self):
         if self.gng not in GNG_KINDS:
@@ -122,11 +165,94 @@ class AttentionPipeline:
             forward=forward, ground_z=ground_z,
         )  # fmt: skip
         t2 = time.perf_counter()
+        if self.params.refine and aff.obstacles:
+            aff = self._refine(aff, points, forward, sensor_origin)
+        t3 = time.perf_counter()
         self._remember(aff, t)
         self.last = aff
         self.n_steps += 1
-        self.timings = {"gng": t1 - t0, "affordance": t2 - t1, "total": time.perf_counter() - t0}
+        self.timings = {
+            "gng": t1 - t0,
+            "affordance": t2 - t1,
+            "refine": t3 - t2,
+            "total": time.perf_counter() - t0,
+        }
         return aff
+
+    def _refine(self, aff: Affordances, points: np.ndarray, forward, sensor_origin) -> Affordances:
+        """Objects' height, width, length and box from the raw points round them.
+
+        The graph finds the objects and says how sure it is (density, ``suspected``); their
+        sizes are read on the frame itself ("the raw data around the suspected obstacle are
+        processed separately", §4.1): a GNG's nodes sit inside the surface they quantise, so
+        node extents fall short of a block's edges by about half a node spacing on each side.
+        """
+        pts = np.asarray(points)
+        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not np.isfinite(aff.ground_z):
+            return aff
+        if pts.dtype not in (np.float32, np.float64) or not pts.flags.c_contiguous:
+            pts = np.ascontiguousarray(pts, dtype=np.float64)
+        fwd = np.asarray(forward, dtype=np.float64).reshape(-1)
+        h = float(np.hypot(fwd[0], fwd[1]))
+        if not h > 1e-9:
+            return aff
+        fx, fy = fwd[0] / h, fwd[1] / h
+        origin = np.asarray(sensor_origin, dtype=np.float64).reshape(-1)
+        if origin.shape != (3,) or not np.all(np.isfinite(origin)):
+            return aff
+        idx = [i for i, o in enumerate(aff.objects) if o.kind == "object"]
+        boxes = np.ascontiguousarray(np.stack([aff.objects[i].box for i in idx]), dtype=np.float64)
+        ap = self.affordance_params
+        p = self.params
+        res = _k.refine_objects_kernel(
+            pts, boxes, float(aff.ground_z), ap.ground_tolerance, p.refine_margin, fx, fy,
+            p.refine_iters, p.refine_quantile, 0.9, p.refine_gap, origin, 64, 4.0,
+        )  # fmt: skip
+        objects = list(aff.objects)
+        g = float(aff.ground_z)
+        relabelled = False
+        for row, i in zip(res, idx, strict=True):
+            if not row[0] > 0 and p.verify:
+                # Not one raw point stands above the floor round it: a GNG artefact (e.g. a
+                # node behind a new obstacle pulled up by the points on its top), not an object.
+                objects[i] = objects[i]._replace(kind="terrain", suspected=False)
+                relabelled = True
+                continue
+            if not row[0] >= p.refine_min_points:
+                continue
+            o = objects[i]
+            f0, f1, l0, l1 = row[4:8]
+            # Raw-point spacing on the object, sqrt(footprint / points): the outermost samples
+            # stop short of an edge by about half a spacing on each side.
+            e = 0.5 * p.refine_edge * float(np.sqrt(max(f1 - f0, 0.0) * max(l1 - l0, 0.0) / row[0]))
+            f0, f1, l0, l1 = f0 - e, f1 + e, l0 - e, l1 + e
+            cx = np.array([f0, f1, f1, f0]) * fx - np.array([l0, l0, l1, l1]) * fy
+            cy = np.array([f0, f1, f1, f0]) * fy + np.array([l0, l0, l1, l1]) * fx
+            box = np.array(
+                [[cx.min(), cy.min(), min(o.box[0, 2], g)], [cx.max(), cy.max(), g + row[1]]]
+            )
+            o = o._replace(
+                height=float(row[1]), width=float(l1 - l0), length=float(f1 - f0), box=box
+            )
+            if p.view_cut >= 0.0 and row[8] <= p.view_cut and row[1] >= p.min_height:
+                # The top of the field of view cuts this surface off: what is seen is the foot
+                # of something taller (a wall beyond the 45°-pitched sensors' reach), not a
+                # block whose top is in sight. Its height is then only a lower bound.
+                o = o._replace(kind="wall", suspected=False)
+                relabelled = True
+            objects[i] = o
+        if relabelled:
+            kinds = tuple(o.kind for o in objects)
+            boxes_s = [
+                o.box + np.array([[-ap.suspect_padding] * 3, [ap.suspect_padding] * 3])
+                for o in objects
+                if o.kind == "object" and o.suspected
+            ]
+            sboxes = np.array(boxes_s).reshape(-1, 2, 3)
+            return dataclasses.replace(
+                aff, objects=objects, label_kinds=kinds, suspected_boxes=sboxes
+            )
+        return dataclasses.replace(aff, objects=objects)
 
     def _remember(self, aff: Affordances, t: float) -> None:
         pad = self.affordance_params.suspect_padding
