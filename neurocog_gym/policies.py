@@ -96,9 +96,21 @@ def _load_sb3(path: Path):
 
 
 def make_policy(spec: str):
-    """``"aef"``, ``"blind"``, an AEF weights file (``.npz``) or a stable-baselines3 model."""
+    """A policy by name or file.
+
+    * ``"aef"``: :class:`AEFPolicy`, both output groups (interrupts and walking provision);
+    * ``"aef-provision"``: :class:`AEFPolicy` with the interrupt group off (``interrupt_gain=0``),
+      only the walking provision acts;
+    * ``"blind"``: :class:`BlindPolicy`;
+    * a path ending in ``.npz``: :class:`AEFPolicy` with those weights;
+    * any other path: a saved stable-baselines3 model (:class:`SB3Policy`).
+    """
     if spec == "aef":
         return AEFPolicy()
+    if spec == "aef-provision":
+        policy = AEFPolicy(interrupt_gain=0.0)
+        policy.name = "aef-provision"
+        return policy
     if spec == "blind":
         return BlindPolicy()
     if spec.endswith(".npz"):

@@ -76,9 +76,9 @@ def load_run(path: str | os.PathLike) -> Run:
 def run_label(config: dict) -> str:
     """Short name of a run: policy (model file stem) and attention setting."""
     policy = str(config.get("policy") or "?")
-    if policy not in ("aef", "blind"):
+    if policy not in ("aef", "aef-provision", "blind"):
         policy = Path(policy).stem
-    name = {"aef": "AEF", "blind": "blind"}.get(policy, policy)
+    name = {"aef": "AEF", "aef-provision": "AEF provision only", "blind": "blind"}.get(policy, policy)
     return f"{name}, attention {config.get('attention') or 'on'}"
 
 

@@ -119,11 +119,22 @@ class ObstacleEnv(QuadrupedEnv):
         self.pipeline.step(self.frame.points, self.frame.origins.mean(axis=0), self.data.time, forward)
         self.perception_time += self.pipeline.timings["total"]
 
+    def perceived_boxes(self) -> np.ndarray:
+        """(K, 2, 3) the objects' boxes in the attention memory, without the attention padding
+        (the DD-GNG samples a padded box; the effectivity checks the object itself)."""
+        boxes = self.pipeline.attention_boxes.copy()
+        if len(boxes):
+            pad = self.pipeline.affordance_params.suspect_padding
+            boxes[:, 0] += pad
+            boxes[:, 1] -= pad
+            boxes[:, 0, 2] = np.maximum(boxes[:, 0, 2], 0.0)
+        return boxes
+
     def _update_effectivity(self) -> None:
         d = self.data
         self.eff = self.effectivity.step(
             d.time, self.touch(), self._feet().copy(), d.xpos[self.robot.hip_body].copy(),
-            self._yaw(), d.qvel[0:3].copy(), self.pipeline.attention_boxes,
+            self._yaw(), d.qvel[0:3].copy(), self.perceived_boxes(),
         )  # fmt: skip
 
     # -- episode --------------------------------------------------------------------------------

@@ -91,7 +91,10 @@ def motor_neuron_step(
 
     Eq. (8): theta_dd = (mu1 y + mu2 Theta) theta_dd_MAX F_l(theta) F_v(theta_dot) + S, with y the
     CPG drive of the joint (flexor minus extensor output through the synapses m_i) and Theta the
-    AEF interrupt; the activation is clipped to [-1, 1]. Eq. (11): S = sum_l z_il s_l.
+    AEF interrupt. The CPG part of the activation is clipped to [-1, 1] and mu2 Theta is added on
+    top (our reading: with mu2 > 1 an interrupt can override a saturated CPG burst; the CPG
+    itself runs on untouched, Fig. 19: "the signal pattern is not influenced"). With Theta = 0
+    nothing changes. Eq. (11): S = sum_l z_il s_l.
     The servos are angle-driven, so the acceleration is integrated (semi-implicit Euler) into the
     position target ``q_ref``. Our addition, not in the paper: a visco-elastic restoring term
     -k (q_ref - posture) - d q_ref_dot (the passive muscle-tendon of the pool); without it a double
@@ -120,11 +123,12 @@ def motor_neuron_step(
     """
     n = q_ref.shape[0]
     for i in range(n):
-        a = mu1 * drive[i] + mu2 * theta_int[i]
+        a = mu1 * drive[i]
         if a > 1.0:
             a = 1.0
         elif a < -1.0:
             a = -1.0
+        a += mu2 * theta_int[i]
         # The active muscle shortens when the joint moves the way it pulls.
         v_muscle = -theta_dot[i] if a >= 0.0 else theta_dot[i]
         fl = force_length(theta[i], posture[i], fl_width[i], fl_c)

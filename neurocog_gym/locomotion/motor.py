@@ -31,8 +31,9 @@ class MotorParams:
 
     mu1: float = 1.0
     """mu_1, gain of the CPG input, dimensionless (Eq. 8)."""
-    mu2: float = 1.0
-    """mu_2, gain of the interrupt Theta, dimensionless (Eq. 8)."""
+    mu2: float = 3.0
+    """mu_2, gain of the interrupt Theta, dimensionless (Eq. 8): three times the CPG's authority, so
+    an interrupt can hold a leg far from its rhythmic path (the paper leaves mu_2 free)."""
     acc_max: tuple[float, ...] = field(default_factory=lambda: _twelve(120.0))
     """theta_dd_MAX per joint, rad/s^2 (Eq. 8; "chosen through preliminary testing")."""
     vel_max: tuple[float, ...] = field(default_factory=lambda: _twelve(7.0))

@@ -53,12 +53,16 @@ def test_eq8_and_eq11_by_hand():
 
 
 def test_eq8_activation_clipped_and_shaped():
-    # a = 0.9 + 0.9 -> clipped to 1; joint moving the way it pulls at 3.5 rad/s: F_v = 1/3.
-    _, _, acc = _one_step(0.9, 0.9, 0.0, 3.5, [0.0], [0.0])
-    assert acc == pytest.approx(100.0 / 3.0)
+    # CPG part 1.4 -> clipped to 1, the interrupt adds on top: a = 1 + 0.5 = 1.5; joint moving
+    # the way it pulls at 3.5 rad/s: F_v = (7 - 3.5) / (7 + 3.5) = 1/3.
+    _, _, acc = _one_step(1.4, 0.5, 0.0, 3.5, [0.0], [0.0])
+    assert acc == pytest.approx(1.5 * 100.0 / 3.0)
     # Negative activation, joint moving negative (shortening of the other muscle): also 1/3.
-    _, _, acc = _one_step(-0.9, -0.9, 0.0, -3.5, [0.0], [0.0])
-    assert acc == pytest.approx(-100.0 / 3.0)
+    _, _, acc = _one_step(-1.4, -0.5, 0.0, -3.5, [0.0], [0.0])
+    assert acc == pytest.approx(-1.5 * 100.0 / 3.0)
+    # The interrupt overrides a saturated CPG burst: 1 - 1.5 = -0.5, joint at rest.
+    _, _, acc = _one_step(1.4, -1.5, 0.0, 0.0, [0.0], [0.0])
+    assert acc == pytest.approx(-50.0)
 
 
 def test_restoring_term_and_limits():
