@@ -60,6 +60,18 @@ def _cmd_demo(args) -> int:
     for key in ("video", "plot"):
         if key in summary:
             print(f"{key}: {summary[key]}")
+    if args.trials > 0:
+        from pathlib import Path
+
+        from neurocog_gym.demo import bench_demo
+
+        policies = tuple(p.strip() for p in args.policies.split(",") if p.strip())
+        report, table = bench_demo(Path(args.out) / "bench", trials=args.trials,
+                                   policies=policies, seed=args.seed, workers=args.workers)  # fmt: skip
+        print(f"\nObstacle benchmark, {args.trials} trials per scenario and policy "
+              f"(the README has the 50-trial tables):")  # fmt: skip
+        print("\n".join(table))
+        print(f"report: {report}")
     return 0
 
 
@@ -137,6 +149,50 @@ def _cmd_bench_report(args) -> int:
     return 0
 
 
+def _cmd_record_video(args) -> int:
+    from neurocog_gym.video import record_video
+
+    s = record_video(
+        args.env, policy=args.policy, out=args.out, seconds=args.seconds, seed=args.seed,
+        camera=args.camera, width=args.width, height=args.height, fps=args.fps,
+        progress=not args.quiet,
+    )  # fmt: skip
+    tail = f", outcome {s['outcome']}" if "outcome" in s else ""
+    print(f"{s['frames']} frames ({s['seconds']:.2f} s simulated, {s['fps']} fps), "
+          f"{s['distance_m']:.2f} m walked{tail}: {s['out']}")  # fmt: skip
+    return 0
+
+
+def _cmd_info(args) -> int:
+    import json
+
+    import neurocog_gym
+    from neurocog_gym.catalog import describe, format_text
+
+    ids = [args.env] if args.env else list(neurocog_gym.ENV_IDS)
+    descs = [describe(i) for i in ids]
+    if args.json:
+        print(json.dumps(descs, indent=2))
+    else:
+        print(f"neurocog_gym {neurocog_gym.__version__}: {len(descs)} environment(s)\n")
+        print("\n\n".join(format_text(d) for d in descs))
+    return 0
+
+
+def _even_pixels(text: str) -> int:
+    value = _positive_int(text)
+    if value < 16 or value % 2:
+        raise argparse.ArgumentTypeError(f"must be an even number >= 16, got {text}")
+    return value
+
+
+def _fps(text: str) -> int:
+    value = _positive_int(text)
+    if value > 100:
+        raise argparse.ArgumentTypeError(f"must be at most 100 (the control rate), got {text}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = _Parser(
@@ -145,12 +201,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("demo", help="walk the robot and write a video and a gait plot",
+    p = sub.add_parser("demo", help="walk (video, gait plot), then a short obstacle benchmark",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
     p.add_argument("--out", default="runs/demo", help="output folder")
-    p.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated seconds")
+    p.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated seconds of walking")
     p.add_argument("--seed", type=_nonneg_int, default=0, help="episode seed")
     p.add_argument("--no-video", action="store_true", help="skip the video (faster)")
+    p.add_argument("--trials", type=_nonneg_int, default=4,
+                   help="obstacle trials per scenario and policy (0: walk only)")  # fmt: skip
+    p.add_argument("--policies", default="aef,aef-provision,blind",
+                   help="comma-separated policies of the short benchmark")  # fmt: skip
+    p.add_argument("--workers", type=_positive_int, default=None,
+                   help="parallel trials (None: all local cores)")  # fmt: skip
     p.set_defaults(func=_cmd_demo)
 
     # Defaults are written in the help: None means "Table 3's value, or the run's on --resume".
@@ -194,7 +256,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_nonneg_int, default=0,
                    help="run seed (trial seeds derive from seed, scenario, i)")  # fmt: skip
     p.add_argument("--policy", default="aef",
-                   help="aef, blind, AEF weights (.npz) or a stable-baselines3 model "
+                   help="aef, aef-provision (interrupts off), blind, AEF weights (.npz) or a stable-baselines3 model "
                    "(.zip)")  # fmt: skip
     p.add_argument("--attention", choices=("on", "off"), default="on",
                    help="off: plain GNG instead of DD-GNG attention (the ablation)")  # fmt: skip
@@ -213,6 +275,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("runs", nargs="+", help="bench run folders, shown side by side")
     p.add_argument("--out", default="runs/bench_report", help="folder of report.md and plots")
     p.set_defaults(func=_cmd_bench_report)
+
+    p = sub.add_parser("record-video",
+                       help="an episode to MP4 with the attention graph, facets and footholds",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
+    p.add_argument("--env", default="NeuroCog/SuddenObstacle-v0",
+                   help="registered env id (see neurocog info)")  # fmt: skip
+    p.add_argument("--policy", default="aef",
+                   help="aef, aef-provision (interrupts off), blind, AEF weights (.npz) or a stable-baselines3 model (.zip); "
+                   "Walk-v0 takes blind or a model trained on it")  # fmt: skip
+    p.add_argument("--seconds", type=_positive_float, default=7.0,
+                   help="simulated seconds (the episode may end sooner: fell or passed)",
+                   )  # fmt: skip
+    p.add_argument("--seed", type=_nonneg_int, default=0, help="episode seed")
+    p.add_argument("--camera", default="follow", help="scene camera: follow, side or overhead")
+    p.add_argument("--width", type=_even_pixels, default=640, help="frame width, pixels")
+    p.add_argument("--height", type=_even_pixels, default=480, help="frame height, pixels")
+    p.add_argument("--fps", type=_fps, default=50, help="video frames per second (real time)")
+    p.add_argument("--out", default="runs/video.mp4", help="MP4 file to write")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_record_video)
+
+    p = sub.add_parser("info", help="the registered envs: spaces, episode length, parameters",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
+    p.add_argument("--env", default=None, help="one env id (default: every registered id)")
+    p.add_argument("--json", action="store_true", help="machine-readable JSON instead of text")
+    p.set_defaults(func=_cmd_info)
     return parser
 
 

@@ -103,3 +103,34 @@ def plot_gait(t, foot_z, touch, hip, cpg, path: Path, window: float = 3.0) -> No
     fig.tight_layout()
     nio.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
+
+
+def bench_demo(
+    out: str | Path,
+    trials: int = 4,
+    policies: tuple[str, ...] = ("aef", "aef-provision", "blind"),
+    seed: int = 0,
+    workers: int | None = None,
+) -> tuple[Path, list[str]]:
+    """A short obstacle benchmark: ``trials`` per scenario for each policy, one report.
+
+    Writes ``out/<policy>/`` run folders (``trials.jsonl``, ``summary.json``; a rerun resumes)
+    and ``out/report.md`` with the policies side by side beside the paper's Table 4.
+
+    Returns:
+        The report path and the Table 4 lines (markdown).
+    """
+    from neurocog_gym.bench.report import _table4, load_run, write_report
+    from neurocog_gym.bench.runner import BenchConfig, run_benchmark
+
+    out = Path(out)
+    dirs = []
+    for policy in policies:
+        d = out / policy
+        run_benchmark(
+            BenchConfig(out=str(d), scenarios=("sudden", "static"), trials=trials, seed=seed,
+                        policy=policy, workers=workers, resume=True)
+        )  # fmt: skip
+        dirs.append(d)
+    report = write_report(dirs, out)
+    return report, _table4([load_run(d) for d in dirs])

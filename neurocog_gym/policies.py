@@ -95,6 +95,10 @@ def _load_sb3(path: Path):
     raise ValueError(f"{path} is not a stable-baselines3 model ({errors[0]})")
 
 
+POLICY_NAMES = ("aef", "aef-provision", "blind")
+"""Named policies; anything else is a file (AEF weights or a stable-baselines3 model)."""
+
+
 def make_policy(spec: str):
     """A policy by name or file.
 

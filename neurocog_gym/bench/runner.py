@@ -86,7 +86,7 @@ class BenchConfig:
     seed: int = 0
     """Run seed S; trial seeds derive from (S, scenario, index)."""
     policy: str = "aef"
-    """"aef", "blind" or the path of a saved stable-baselines3 model."""
+    """"aef", "aef-provision", "blind", AEF weights (.npz) or a saved stable-baselines3 model."""
     attention: str = "on"
     """"on": DD-GNG attention; "off": plain GNG (the ablation)."""
     max_seconds: float | None = None
@@ -599,8 +599,10 @@ def run_benchmark(config: BenchConfig) -> BenchResult:
     """Run (or resume) a benchmark; see the module docstring for the files it writes."""
     from tqdm import tqdm
 
+    from neurocog_gym.policies import POLICY_NAMES
+
     policy = config.policy
-    if policy not in ("aef", "blind"):
+    if policy not in POLICY_NAMES:
         path = Path(policy).expanduser()
         if not path.is_file():
             raise FileNotFoundError(f"policy model file {policy} does not exist")
