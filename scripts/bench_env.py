@@ -1,0 +1,351 @@
+"""Obstacle-env throughput beside Gymnasium's Ant-v5, and PPO throughput beside PPO on Ant-v5.
+
+Parts (each printed as a markdown table; all timed interleaved in rounds, so that load from other
+processes falls on every row alike, and reported as medians over the rounds):
+
+1. ``--part env``: env steps/s of ``NeuroCog/SuddenObstacle-v0`` with full perception at default
+   settings (ToF 56 x 43 per sensor, numba caster, DD-GNG + affordances + effectivity every
+   cycle), zero actions (CPG walking; an episode ends when the robot passes the block or at 7 s,
+   and resets are counted in the time), beside ``Ant-v5`` with uniform random actions; the same
+   env at full sensor resolution (224 x 172 per sensor, 154,112 rays a frame); and
+   ``gymnasium.make_vec`` with 2 envs in ``async`` mode (one process each) and in ``sync`` mode
+   against 1 env in this process (env steps/s = vector steps/s x 2). Writes ``--out``
+   (docs/benchmarks_env.md).
+2. ``--part ppo``: stable-baselines3 PPO training throughput (env steps/s of ``model.learn``,
+   rollouts and updates) of ``scripts/train_ppo.py`` with the same hyper-parameters on
+   ``NeuroCog/SuddenObstacle-v0`` and on ``Ant-v5``; optionally the success rates of finished
+   ``neurocog bench`` runs (``--bench-runs``) side by side. Writes ``--ppo-out``
+   (docs/benchmarks_ppo.md).
+
+The load average (``uptime``) is recorded before and after each part: on a shared machine the
+absolute numbers move with it, the ratios much less.
+
+    python scripts/bench_env.py --part env
+    python scripts/bench_env.py --part ppo --bench-runs runs/bench_aef10 runs/bench_ppo10
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import neurocog_gym  # noqa: F401  (registers the env ids)
+
+SUDDEN = "NeuroCog/SuddenObstacle-v0"
+
+
+@dataclasses.dataclass(frozen=True)
+class Args:
+    """Command-line arguments."""
+
+    part: str = "env"
+    """env, ppo or all."""
+    rounds: int = 7
+    """Interleaved timing rounds (medians over them)."""
+    steps: int = 300
+    """Timed env steps per round and row (Ant-v5: 5x as many)."""
+    full_steps: int = 60
+    """Timed env steps per round at full sensor resolution."""
+    vec_steps: int = 150
+    """Timed vector steps per round of the make_vec rows."""
+    ppo_steps: int = 4096
+    """PPO env steps per round and env (over all its envs)."""
+    ppo_rounds: int = 3
+    """Interleaved PPO rounds."""
+    ppo_envs: int = 2
+    """Envs of each PPO run (subproc when > 1), as in scripts/train_ppo.py's default."""
+    train_run: str = ""
+    """A scripts/train_ppo.py run folder whose train_summary.json goes into the PPO section."""
+    bench_runs: tuple[str, ...] = ()
+    """neurocog bench run folders whose summary.json goes into the PPO section."""
+    out: str = "docs/benchmarks_env.md"
+    """Markdown of part env ('' to skip)."""
+    ppo_out: str = "docs/benchmarks_ppo.md"
+    """Markdown of part ppo ('' to skip)."""
+
+
+def parse_args(argv: list[str] | None = None) -> Args:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    for f in dataclasses.fields(Args):
+        name = "--" + f.name.replace("_", "-")
+        if f.name == "bench_runs":
+            parser.add_argument(name, nargs="*", default=[])
+        else:
+            parser.add_argument(name, type=type(f.default), default=f.default)
+    ns = vars(parser.parse_args(argv))
+    ns["bench_runs"] = tuple(ns["bench_runs"])
+    args = Args(**ns)
+    if args.part not in ("env", "ppo", "all"):
+        parser.error(f"--part must be env, ppo or all, got {args.part!r}")
+    if min(args.rounds, args.steps, args.full_steps, args.vec_steps, args.ppo_steps,
+           args.ppo_rounds, args.ppo_envs) < 1:  # fmt: skip
+        parser.error("counts must be >= 1")
+    return args
+
+
+# -- machine -------------------------------------------------------------------------------------
+
+
+def load_average() -> str:
+    """The three load averages, as ``uptime`` prints them."""
+    one, five, fifteen = os.getloadavg()
+    return f"{one:.2f}, {five:.2f}, {fifteen:.2f}"
+
+
+def machine() -> str:
+    cpu = platform.processor() or "?"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import mujoco
+    import stable_baselines3
+    import torch
+
+    return (f"{cpu}, {os.cpu_count()} logical cores, {platform.system()} {platform.release()}, "
+            f"Python {platform.python_version()}, MuJoCo {mujoco.__version__}, Gymnasium "
+            f"{gym.__version__}, stable-baselines3 {stable_baselines3.__version__}, torch "
+            f"{torch.__version__}")  # fmt: skip
+
+
+def _uptime() -> str:
+    try:
+        return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    except OSError:
+        return f"load average: {load_average()}"
+
+
+# -- part env ------------------------------------------------------------------------------------
+
+
+def _stepper(env, rng: np.random.Generator | None):
+    """A callable that steps ``env`` once (zero or random action), resetting when it ends."""
+    zero = np.zeros(env.action_space.shape, env.action_space.dtype)
+    lo, hi = env.action_space.low, env.action_space.high
+    env.reset(seed=0)
+
+    def step():
+        a = zero if rng is None else rng.uniform(lo, hi).astype(env.action_space.dtype)
+        _, _, term, trunc, _ = env.step(a)
+        if term or trunc:
+            env.reset()
+
+    return step, 1
+
+
+def _vec_stepper(env_id: str, mode: str, n: int):
+    envs = gym.make_vec(env_id, num_envs=n, vectorization_mode=mode)
+    envs.reset(seed=list(range(n)))
+    zero = np.zeros((n, *envs.single_action_space.shape), envs.single_action_space.dtype)
+
+    def step():
+        envs.step(zero)  # autoreset: a finished sub-env resets on its next step
+
+    return step, n, envs
+
+
+def _time_rows(rows: dict, rounds: int) -> dict[str, float]:
+    """Env steps/s of each row, median over interleaved rounds (rows: name -> (fn, per_call, n))."""
+    for fn, _, n in rows.values():
+        for _ in range(max(3, n // 10)):  # warm up: JIT, caches, worker start
+            fn()
+    per_round: dict[str, list[float]] = {k: [] for k in rows}
+    for _ in range(rounds):
+        for name, (fn, per_call, n) in rows.items():
+            t0 = time.perf_counter()
+            for _ in range(n):
+                fn()
+            per_round[name].append(n * per_call / (time.perf_counter() - t0))
+    return {k: float(np.median(v)) for k, v in per_round.items()}
+
+
+def part_env(args: Args) -> list[str]:
+    from neurocog_gym.robot.tof import ToFParams
+
+    load0, up0 = load_average(), _uptime()
+    full = ToFParams.at_scale(1.0, backend="numba")
+    sudden = gym.make(SUDDEN, max_episode_steps=700)
+    sudden_full = gym.make(SUDDEN, tof=full)
+    ant = gym.make("Ant-v5")
+    rows = {}
+    for name, env, rng, n in (
+        ("sudden", sudden, None, args.steps),
+        ("ant", ant, np.random.default_rng(0), 5 * args.steps),
+        ("sudden_full", sudden_full, None, args.full_steps),
+    ):
+        fn, per = _stepper(env, rng)
+        rows[name] = (fn, per, n)
+    vec_envs = []
+    for mode in ("async", "sync"):
+        fn, per, envs = _vec_stepper(SUDDEN, mode, 2)
+        rows[f"vec_{mode}_2"] = (fn, per, args.vec_steps)
+        vec_envs.append(envs)
+    rays = full.n_rays
+    rate = _time_rows(rows, args.rounds)
+    for e in (sudden, sudden_full, ant, *vec_envs):
+        e.close()
+    load1, up1 = load_average(), _uptime()
+    r_ant = rate["sudden"] / rate["ant"]
+    r_vec = rate["vec_async_2"] / rate["sudden"]
+    dt = 0.01
+    lines = [
+        "## Env throughput (`scripts/bench_env.py`)",
+        "",
+        f"Machine: {machine()}.",
+        f"Load average before / after: {load0} / {load1}  ",
+        f"`uptime` before: `{up0}`  ",
+        f"`uptime` after: `{up1}`",
+        "",
+        f"Command: `python scripts/bench_env.py --part env --rounds {args.rounds} --steps "
+        f"{args.steps} --full-steps {args.full_steps} --vec-steps {args.vec_steps}`. One process "
+        "(the async row adds two workers); rows timed interleaved in rounds, medians over "
+        f"{args.rounds} rounds; episode resets are inside the timed steps.",
+        "",
+        "| row | env steps/s | simulated s per wall s | ratio | target | met |",
+        "|---|---:|---:|---:|---:|:-:|",
+        f"| `{SUDDEN}`, full perception, default settings (ToF 4 x 56 x 43), zero actions "
+        f"| {rate['sudden']:,.0f} | {rate['sudden'] * dt:.1f} | {r_ant:.2f}x Ant-v5 | >= 0.5x "
+        f"| {'yes' if r_ant >= 0.5 else 'no'} |",
+        f"| `Ant-v5`, random actions | {rate['ant']:,.0f} | {rate['ant'] * 0.05:.1f} | 1 | | |",
+        f"| `{SUDDEN}`, full-resolution sensing (4 x 224 x 172 = {rays:,} rays a frame) "
+        f"| {rate['sudden_full']:,.0f} | {rate['sudden_full'] * dt:.2f} | | >= 100 steps/s "
+        f"| {'yes' if rate['sudden_full'] >= 100 else 'no'} |",
+        f"| `gymnasium.make_vec({SUDDEN!r}, 2, 'async')` | {rate['vec_async_2']:,.0f} "
+        f"| {rate['vec_async_2'] * dt:.1f} | {r_vec:.2f}x 1 env | >= 1.6x "
+        f"| {'yes' if r_vec >= 1.6 else 'no'} |",
+        f"| `gymnasium.make_vec({SUDDEN!r}, 2, 'sync')` | {rate['vec_sync_2']:,.0f} "
+        f"| {rate['vec_sync_2'] * dt:.1f} | {rate['vec_sync_2'] / rate['sudden']:.2f}x 1 env | | |",
+        "",
+        "Ant-v5's control step is 0.05 s (frame_skip 5 of 0.01 s); ours is 0.01 s. The async ratio "
+        "needs two idle cores: with other processes on the machine (see the load above) the two "
+        "workers share what is left.",
+        "",
+    ]
+    return lines
+
+
+# -- part ppo ------------------------------------------------------------------------------------
+
+
+def _ppo_rate(env_id: str, args: Args, seed: int) -> float:
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import tempfile
+
+    import train_ppo
+
+    with tempfile.TemporaryDirectory() as tmp:
+        a = train_ppo.Args(
+            env_id=env_id, total_steps=args.ppo_steps, n_envs=args.ppo_envs, seed=seed,
+            checkpoint_every=10**9, out=tmp, tensorboard=False,
+        )  # fmt: skip
+        return float(train_ppo.train(a)["steps_per_s"])
+
+
+def _bench_rows(folders: tuple[str, ...]) -> list[str]:
+    if not folders:
+        return []
+    lines = [
+        "### Success rates (`neurocog bench`)",
+        "",
+        "| run | policy | scenario | trials | success | touch | fail | success incl. touch |",
+        "|---|---|---|---:|---:|---:|---:|---:|",
+    ]
+    for folder in folders:
+        s = json.loads((Path(folder) / "summary.json").read_text())
+        trials = [json.loads(x) for x in (Path(folder) / "trials.jsonl").read_text().splitlines()
+                  if x.strip()]  # fmt: skip
+        policy = trials[0].get("policy", "?") if trials else "?"
+        policy = Path(policy).name if policy not in ("aef", "blind") else policy
+        for scen in ("sudden", "static"):
+            if scen not in s:
+                continue
+            c = s[scen]
+            n = c["trials"]
+            lines.append(
+                f"| `{folder}` | {policy} | {scen} | {n} | {c['success']} | {c['touch']} | "
+                f"{c['fail']} | {100 * (c['success'] + c['touch']) / max(n, 1):.0f} % |"
+            )
+    return lines + [""]
+
+
+def part_ppo(args: Args) -> list[str]:
+    load0, up0 = load_average(), _uptime()
+    rates: dict[str, list[float]] = {SUDDEN: [], "Ant-v5": []}
+    for r in range(args.ppo_rounds):
+        for env_id in rates:
+            rates[env_id].append(_ppo_rate(env_id, args, seed=r))
+            print(f"round {r}: PPO on {env_id}: {rates[env_id][-1]:.0f} steps/s", flush=True)
+    med = {k: float(np.median(v)) for k, v in rates.items()}
+    load1, up1 = load_average(), _uptime()
+    lines = [
+        "## PPO (stable-baselines3) on the obstacle task (`scripts/train_ppo.py`)",
+        "",
+        f"Machine: {machine()}.",
+        f"Load average before / after: {load0} / {load1}  ",
+        f"`uptime` before: `{up0}`  ",
+        f"`uptime` after: `{up1}`",
+        "",
+        f"Command: `python scripts/bench_env.py --part ppo --ppo-steps {args.ppo_steps} "
+        f"--ppo-rounds {args.ppo_rounds} --ppo-envs {args.ppo_envs}`. Each round trains a fresh "
+        f"PPO for {args.ppo_steps} env steps on each env in turn with `scripts/train_ppo.py`'s "
+        f"defaults ({args.ppo_envs} env(s), SubprocVecEnv, n_steps 512, batch 256, 10 epochs, "
+        "128x128 networks, torch 1 thread); steps/s is env steps over the wall time of "
+        "`model.learn` (rollouts and updates); medians over the rounds.",
+        "",
+        "| env | policy | PPO env steps/s | rounds | vs Ant-v5 |",
+        "|---|---|---:|---|---:|",
+        f"| `{SUDDEN}` | MultiInputPolicy | {med[SUDDEN]:,.0f} | "
+        f"{', '.join(f'{x:,.0f}' for x in rates[SUDDEN])} | {med[SUDDEN] / med['Ant-v5']:.2f}x |",
+        f"| `Ant-v5` | MlpPolicy | {med['Ant-v5']:,.0f} | "
+        f"{', '.join(f'{x:,.0f}' for x in rates['Ant-v5'])} | 1 |",
+        "",
+    ]
+    if args.train_run:
+        t = json.loads((Path(args.train_run) / "train_summary.json").read_text())
+        a = json.loads((Path(args.train_run) / "args.json").read_text())
+        lines += [
+            "### The trained policy",
+            "",
+            f"`{args.train_run}`: {t['total_steps']:,} env steps of `{t['env_id']}` in "
+            f"{t['wall_s'] / 60:.0f} min ({t['steps_per_s']} steps/s, {t['n_envs']} envs, "
+            f"{t['vec']}; arguments in `args.json`: seed {a['seed']}, n_steps {a['n_steps']}, "
+            f"batch {a['batch_size']}, lr {a['learning_rate']}, log_std_init {a['log_std_init']}). "
+            f"Outcomes of its training episodes (stochastic actions): "
+            f"{t['outcomes_this_session']}. Evaluated with deterministic actions by "
+            "`neurocog bench --policy MODEL --trials 10`:",
+            "",
+        ]
+    return lines + _bench_rows(args.bench_runs)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
+    if args.part in ("env", "all"):
+        lines = part_env(args)
+        print("\n".join(lines))
+        if args.out:
+            Path(args.out).write_text("\n".join(lines) + "\n")
+            print(f"wrote {args.out}")
+    if args.part in ("ppo", "all"):
+        lines = part_ppo(args)
+        print("\n".join(lines))
+        if args.ppo_out:
+            Path(args.ppo_out).write_text("\n".join(lines) + "\n")
+            print(f"wrote {args.ppo_out}")
+
+
+if __name__ == "__main__":
+    main()

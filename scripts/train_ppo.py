@@ -1,0 +1,275 @@
+"""PPO (stable-baselines3) on NeuroCog/SuddenObstacle-v0: vectorised envs, TensorBoard, checkpoints.
+
+The agent acts where the paper's AEF acts (15 values: 12 joint interrupts, 3 walking
+provisions); the CPG keeps walking underneath, so the policy starts near "all zeros" (a small
+initial action spread, ``log_std_init``) and learns corrections. Observations are the env's
+``Dict`` (``MultiInputPolicy``); ``Box`` observation envs such as Gymnasium's ``Ant-v5`` get
+``MlpPolicy`` (used by ``scripts/bench_env.py --ppo`` for the throughput comparison).
+
+Files in ``--out``: ``args.json``, ``checkpoints/ppo_<steps>_steps.zip`` (every
+``--checkpoint-every`` env steps), ``tb/`` (TensorBoard: ``tensorboard --logdir OUT/tb``; besides
+SB3's losses it logs ``outcome/success``, ``outcome/touch``, ``outcome/fail`` over finished
+episodes), ``model.zip`` (the final model) and ``train_summary.json`` (steps, wall time,
+steps/s, outcome counts). ``--resume`` continues from the newest checkpoint (or ``model.zip``)
+up to ``--total-steps``. No observation normalisation: the saved zip alone is the policy, so
+``neurocog bench --policy OUT/model.zip`` evaluates it.
+
+    python scripts/train_ppo.py --total-steps 200000 --n-envs 2 --out runs/ppo
+    python scripts/train_ppo.py --out runs/ppo --resume            # after a kill
+    neurocog bench --policy runs/ppo/model.zip --trials 10
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import re
+import sys
+import time
+from pathlib import Path
+
+
+@dataclasses.dataclass(frozen=True)
+class Args:
+    """Command-line arguments (``--name-with-dashes``)."""
+
+    env_id: str = "NeuroCog/SuddenObstacle-v0"
+    """Gymnasium id to train on."""
+    total_steps: int = 200_000
+    """Env steps in all (over every env), resumed runs included."""
+    n_envs: int = 2
+    """Parallel envs."""
+    vec: str = "subproc"
+    """subproc (one process per env, SubprocVecEnv) or dummy (in this process)."""
+    seed: int = 0
+    """Seed of the envs (env i gets seed + i), the policy initialisation and the sampling."""
+    n_steps: int = 512
+    """Rollout length per env and update."""
+    batch_size: int = 256
+    """Minibatch size."""
+    n_epochs: int = 10
+    """Epochs over each rollout."""
+    learning_rate: float = 3e-4
+    """Adam step size."""
+    gamma: float = 0.99
+    """Discount."""
+    gae_lambda: float = 0.95
+    """GAE lambda."""
+    clip_range: float = 0.2
+    """PPO clip range."""
+    ent_coef: float = 0.0
+    """Entropy bonus."""
+    log_std_init: float = -1.0
+    """Initial log std of the Gaussian actions (-1: spread 0.37 around zero = CPG walking)."""
+    net_arch: str = "128,128"
+    """Hidden layer widths of the policy and value networks."""
+    checkpoint_every: int = 20_000
+    """Env steps (over every env) between checkpoints."""
+    max_minutes: float = 0.0
+    """Stop (and save) after this many wall-clock minutes of training; 0 for no limit."""
+    torch_threads: int = 1
+    """torch.set_num_threads (the envs want the other cores)."""
+    out: str = "runs/ppo"
+    """Run folder."""
+    resume: bool = False
+    """Continue the run in --out from its newest checkpoint."""
+    tensorboard: bool = True
+    """Write TensorBoard logs to OUT/tb."""
+    progress: bool = False
+    """Show SB3's progress bar."""
+
+
+def parse_args(argv: list[str] | None = None) -> Args:
+    """Parse the command line into :class:`Args` (``--flag``/``--no-flag`` for booleans)."""
+    parser = argparse.ArgumentParser(
+        description=__doc__.splitlines()[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    for f in dataclasses.fields(Args):
+        name = "--" + f.name.replace("_", "-")
+        help_ = _field_doc(f.name)
+        if isinstance(f.default, bool):
+            parser.add_argument(name, action=argparse.BooleanOptionalAction, default=f.default,
+                                help=help_)  # fmt: skip
+        else:
+            parser.add_argument(name, type=type(f.default), default=f.default,
+                                help=f"{help_} (default {f.default})")  # fmt: skip
+    args = Args(**vars(parser.parse_args(argv)))
+    if args.total_steps < 1 or args.n_envs < 1 or args.n_steps < 2 or args.batch_size < 2:
+        parser.error("--total-steps, --n-envs must be >= 1; --n-steps, --batch-size >= 2")
+    if args.vec not in ("subproc", "dummy"):
+        parser.error(f"--vec must be subproc or dummy, got {args.vec!r}")
+    if args.checkpoint_every < 1 or args.max_minutes < 0:
+        parser.error("--checkpoint-every must be >= 1, --max-minutes >= 0")
+    try:
+        _net_arch(args.net_arch)
+    except ValueError:
+        parser.error(f"--net-arch must be comma-separated positive integers, got {args.net_arch!r}")
+    return args
+
+
+def _field_doc(name: str) -> str:
+    """The docstring under a dataclass field (read from this file's source)."""
+    src = Path(__file__).read_text()
+    m = re.search(rf"^    {name}: .*\n    \"\"\"(.*?)\"\"\"", src, flags=re.M)
+    return m.group(1) if m else ""
+
+
+def _net_arch(text: str) -> list[int]:
+    widths = [int(w) for w in text.split(",") if w.strip()]
+    if not widths or min(widths) < 1:
+        raise ValueError(text)
+    return widths
+
+
+def _make_vec_env(args: Args):
+    import gymnasium as gym
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    import neurocog_gym  # noqa: F401  (registers the ids in this process)
+
+    def make(**kwargs):
+
+        return gym.make(args.env_id, **kwargs)
+
+    cls = SubprocVecEnv if args.vec == "subproc" and args.n_envs > 1 else DummyVecEnv
+    return make_vec_env(make, n_envs=args.n_envs, seed=args.seed, vec_env_cls=cls)
+
+
+def _latest_checkpoint(out: Path) -> Path | None:
+    ckpts = sorted(
+        (out / "checkpoints").glob("ppo_*_steps.zip"),
+        key=lambda p: int(re.search(r"ppo_(\d+)_steps", p.name).group(1)),
+    )
+    if ckpts:
+        return ckpts[-1]
+    return out / "model.zip" if (out / "model.zip").exists() else None
+
+
+def _outcome_callback():
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class OutcomeCallback(BaseCallback):
+        """Counts the outcome of every finished obstacle episode; logs the shares."""
+
+        def __init__(self):
+            super().__init__()
+            self.counts = {"success": 0, "touch": 0, "fail": 0}
+            self._recent: list[str] = []
+
+        def _on_step(self) -> bool:
+            for info, done in zip(self.locals["infos"], self.locals["dones"], strict=True):
+                if done and "outcome" in info:
+                    # A truncated, not-passed episode is a fail (the env's outcome is final here).
+                    o = info["outcome"]
+                    if not info.get("passed"):
+                        o = "fail"
+                    self.counts[o] += 1
+                    self._recent = (self._recent + [o])[-100:]
+            return True
+
+        def _on_rollout_end(self) -> None:
+            if self._recent:
+                for o in self.counts:
+                    self.logger.record(f"outcome/{o}", self._recent.count(o) / len(self._recent))
+
+    return OutcomeCallback()
+
+
+def _time_limit_callback(minutes: float):
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class TimeLimit(BaseCallback):
+        """Stops training once ``minutes`` of wall-clock time have passed."""
+
+        def _on_training_start(self) -> None:
+            self.t0 = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            return minutes <= 0 or time.perf_counter() - self.t0 < 60.0 * minutes
+
+    return TimeLimit()
+
+
+def train(args: Args) -> dict:
+    """Train (or resume) PPO as ``args`` says; return the run summary (also written to disk)."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
+
+    torch.set_num_threads(args.torch_threads)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    ckpt = _latest_checkpoint(out) if args.resume else None
+    if args.resume and ckpt is None:
+        raise FileNotFoundError(f"--resume: no checkpoint or model.zip in {out}")
+    if not args.resume and (out / "model.zip").exists():
+        raise FileExistsError(f"{out}/model.zip exists: pass --resume or another --out")
+    (out / "args.json").write_text(json.dumps(dataclasses.asdict(args), indent=2) + "\n")
+    env = _make_vec_env(args)
+    tb = str(out / "tb") if args.tensorboard else None
+    if ckpt is not None:
+        model = PPO.load(ckpt, env=env, device="cpu", tensorboard_log=tb)
+        print(f"resuming from {ckpt} at {model.num_timesteps} steps", flush=True)
+    else:
+        import gymnasium as gym
+
+        is_dict = isinstance(env.observation_space, gym.spaces.Dict)
+        policy = "MultiInputPolicy" if is_dict else "MlpPolicy"
+        model = PPO(
+            policy, env, n_steps=args.n_steps, batch_size=args.batch_size, n_epochs=args.n_epochs,
+            learning_rate=args.learning_rate, gamma=args.gamma, gae_lambda=args.gae_lambda,
+            clip_range=args.clip_range, ent_coef=args.ent_coef, seed=args.seed, device="cpu",
+            tensorboard_log=tb, verbose=0,
+            policy_kwargs={"log_std_init": args.log_std_init, "net_arch": _net_arch(args.net_arch)},
+        )  # fmt: skip
+    done_before = int(model.num_timesteps)
+    remaining = args.total_steps - done_before
+    outcome = _outcome_callback()
+    checkpoint = CheckpointCallback(
+        save_freq=max(1, args.checkpoint_every // args.n_envs),
+        save_path=str(out / "checkpoints"),
+        name_prefix="ppo",
+    )
+    t0 = time.perf_counter()
+    callbacks = CallbackList([checkpoint, outcome, _time_limit_callback(args.max_minutes)])
+    if remaining > 0:
+        model.learn(
+            total_timesteps=remaining, callback=callbacks, reset_num_timesteps=False,
+            tb_log_name="ppo", progress_bar=args.progress,
+        )  # fmt: skip
+    elapsed = time.perf_counter() - t0
+    model.save(out / "model.zip")
+    env.close()
+    steps = int(model.num_timesteps) - done_before
+    summary = {
+        "env_id": args.env_id,
+        "n_envs": args.n_envs,
+        "vec": args.vec,
+        "total_steps": int(model.num_timesteps),
+        "steps_this_session": steps,
+        "wall_s": round(elapsed, 2),
+        "steps_per_s": round(steps / elapsed, 1) if elapsed > 0 and steps else None,
+        "outcomes_this_session": outcome.counts,
+        "model": str(out / "model.zip"),
+    }
+    (out / "train_summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    try:
+        s = train(args)
+    except (FileNotFoundError, FileExistsError, ValueError) as e:
+        print(f"train_ppo: error: {e}", file=sys.stderr)
+        return 2
+    print(f"{s['total_steps']} steps ({s['steps_this_session']} now) in {s['wall_s']:.0f} s "
+          f"({s['steps_per_s']} steps/s); outcomes {s['outcomes_this_session']}; "
+          f"model: {s['model']}")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,57 @@
+"""scripts/train_ppo.py end to end on a tiny budget, resumed, then evaluated by neurocog bench."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "train_ppo.py"
+TINY = ["--n-envs", "2", "--n-steps", "64", "--batch-size", "64", "--n-epochs", "1",
+        "--checkpoint-every", "128", "--seed", "1"]
+
+
+def _run(*argv, timeout=600):
+    return subprocess.run([sys.executable, *argv], capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.mark.slow
+def test_train_resume_and_bench_the_model(tmp_path):
+    out = tmp_path / "ppo"
+    r = _run(str(SCRIPT), "--total-steps", "256", "--out", str(out), *TINY)
+    assert r.returncode == 0, r.stderr
+    s = json.loads((out / "train_summary.json").read_text())
+    assert s["total_steps"] == 256 and s["n_envs"] == 2 and s["vec"] == "subproc"
+    assert (out / "model.zip").is_file()
+    assert sorted(p.name for p in (out / "checkpoints").iterdir()) == [
+        "ppo_128_steps.zip", "ppo_256_steps.zip"]
+    assert any((out / "tb").rglob("events.out.tfevents.*"))
+    assert json.loads((out / "args.json").read_text())["total_steps"] == 256
+
+    # a second start without --resume refuses to overwrite; with it, it continues
+    r = _run(str(SCRIPT), "--total-steps", "256", "--out", str(out), *TINY)
+    assert r.returncode == 2 and "--resume" in r.stderr
+    r = _run(str(SCRIPT), "--total-steps", "384", "--out", str(out), "--resume", *TINY)
+    assert r.returncode == 0, r.stderr
+    assert "resuming from" in r.stdout and "ppo_256_steps.zip" in r.stdout
+    s = json.loads((out / "train_summary.json").read_text())
+    assert s["total_steps"] == 384 and s["steps_this_session"] == 128
+
+    bench = tmp_path / "bench"
+    r = _run("-m", "neurocog_gym.cli", "bench", "--policy", str(out / "model.zip"),
+             "--trials", "1", "--workers", "1", "--max-seconds", "1", "--out", str(bench))
+    assert r.returncode == 0, r.stderr
+    summary = json.loads((bench / "summary.json").read_text())
+    for scenario in ("sudden", "static"):
+        c = summary[scenario]
+        assert c["trials"] == 1 and c["success"] + c["touch"] + c["fail"] == 1
+
+
+def test_bad_arguments_exit_2():
+    r = _run(str(SCRIPT), "--n-envs", "0")
+    assert r.returncode == 2 and "--n-envs" in r.stderr
+    r = _run(str(SCRIPT), "--vec", "threads")
+    assert r.returncode == 2 and "--vec" in r.stderr
+    r = _run(str(SCRIPT), "--resume", "--out", "/nonexistent/ppo_run")
+    assert r.returncode == 2 and "no checkpoint" in r.stderr
