@@ -110,7 +110,9 @@ def record_video(
         from tqdm import tqdm
 
         bar = tqdm(total=steps, desc="record", unit="step", disable=not progress)
-        writer = imageio.get_writer(out, fps=fps, codec="libx264", macro_block_size=2)
+        # Encode into a temp file beside ``out`` and rename it at the end (never half a video).
+        tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
+        writer = imageio.get_writer(tmp, fps=fps, codec="libx264", macro_block_size=2)
         try:
             writer.append_data(np.asarray(env.render()))
             frames += 1
@@ -124,6 +126,7 @@ def record_video(
         finally:
             writer.close()
             bar.close()
+        os.replace(tmp, out)
         summary = {
             "out": str(out),
             "frames": frames,

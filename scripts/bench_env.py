@@ -332,18 +332,20 @@ def part_ppo(args: Args) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> None:
+    from neurocog_gym.io import atomic_write_text
+
     args = parse_args(argv)
     if args.part in ("env", "all"):
         lines = part_env(args)
         print("\n".join(lines))
         if args.out:
-            Path(args.out).write_text("\n".join(lines) + "\n")
+            atomic_write_text(args.out, "\n".join(lines) + "\n")
             print(f"wrote {args.out}")
     if args.part in ("ppo", "all"):
         lines = part_ppo(args)
         print("\n".join(lines))
         if args.ppo_out:
-            Path(args.ppo_out).write_text("\n".join(lines) + "\n")
+            atomic_write_text(args.ppo_out, "\n".join(lines) + "\n")
             print(f"wrote {args.ppo_out}")
 
 

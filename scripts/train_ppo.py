@@ -198,6 +198,8 @@ def train(args: Args) -> dict:
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
 
+    from neurocog_gym.io import atomic_path, atomic_write_text
+
     torch.set_num_threads(args.torch_threads)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -206,7 +208,7 @@ def train(args: Args) -> dict:
         raise FileNotFoundError(f"--resume: no checkpoint or model.zip in {out}")
     if not args.resume and (out / "model.zip").exists():
         raise FileExistsError(f"{out}/model.zip exists: pass --resume or another --out")
-    (out / "args.json").write_text(json.dumps(dataclasses.asdict(args), indent=2) + "\n")
+    atomic_write_text(out / "args.json", json.dumps(dataclasses.asdict(args), indent=2) + "\n")
     env = _make_vec_env(args)
     tb = str(out / "tb") if args.tensorboard else None
     if ckpt is not None:
@@ -240,7 +242,8 @@ def train(args: Args) -> dict:
             tb_log_name="ppo", progress_bar=args.progress,
         )  # fmt: skip
     elapsed = time.perf_counter() - t0
-    model.save(out / "model.zip")
+    with atomic_path(out / "model.zip") as tmp:
+        model.save(tmp)
     env.close()
     steps = int(model.num_timesteps) - done_before
     summary = {
@@ -254,7 +257,7 @@ def train(args: Args) -> dict:
         "outcomes_this_session": outcome.counts,
         "model": str(out / "model.zip"),
     }
-    (out / "train_summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    atomic_write_text(out / "train_summary.json", json.dumps(summary, indent=2) + "\n")
     return summary
 
 
