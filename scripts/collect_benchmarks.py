@@ -10,7 +10,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-ORDER = ["walk", "tof", "gng", "affordance", "attention", "nsga", "env", "aef", "bench", "soak"]
+ORDER = [
+    "walk", "tof", "gng", "affordance", "perception", "attention", "nsga", "env", "aef", "bench",
+    "ppo", "soak",
+]
 
 
 def main() -> None:
