@@ -24,8 +24,10 @@ def camera_names(model) -> list[str]:
 
 def _check_policy(policy, spec: str, env) -> None:
     """Fail before any frame is written if the policy cannot read this env's observation."""
+    from neurocog_gym.policies import AEFPolicy
+
     space = env.observation_space
-    if getattr(policy, "name", "") == "aef" and not all(k in space.spaces for k in _OBSTACLE_KEYS):
+    if isinstance(policy, AEFPolicy) and not all(k in space.spaces for k in _OBSTACLE_KEYS):
         raise ValueError(
             f"policy {spec!r} reads the obstacle envs' aef_mode/aef_input, which "
             f"{env.spec.id} does not observe; use --policy blind for it"

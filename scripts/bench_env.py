@@ -9,7 +9,8 @@ processes falls on every row alike, and reported as medians over the rounds):
    and resets are counted in the time), beside ``Ant-v5`` with uniform random actions; the same
    env at full sensor resolution (224 x 172 per sensor, 154,112 rays a frame); and
    ``gymnasium.make_vec`` with 2 envs in ``async`` mode (one process each) and in ``sync`` mode
-   against 1 env in this process (env steps/s = vector steps/s x 2). Writes ``--out``
+   against 1 env in this process (env steps/s = vector steps/s x 2); then the time of each
+   stage of an obstacle-env step at default and full resolution. Writes ``--out``
    (docs/benchmarks_env.md).
 2. ``--part ppo``: stable-baselines3 PPO training throughput (env steps/s of ``model.learn``,
    rollouts and updates) of ``scripts/train_ppo.py`` with the same hyper-parameters on
@@ -58,6 +59,8 @@ class Args:
     """Timed env steps per round at full sensor resolution."""
     vec_steps: int = 150
     """Timed vector steps per round of the make_vec rows."""
+    profile_steps: int = 400
+    """Steps of the per-stage profile (part env; 0 skips it)."""
     ppo_steps: int = 4096
     """PPO env steps per round and env (over all its envs)."""
     ppo_rounds: int = 3
@@ -87,8 +90,9 @@ def parse_args(argv: list[str] | None = None) -> Args:
     args = Args(**ns)
     if args.part not in ("env", "ppo", "all"):
         parser.error(f"--part must be env, ppo or all, got {args.part!r}")
-    if min(args.rounds, args.steps, args.full_steps, args.vec_steps, args.ppo_steps,
-           args.ppo_rounds, args.ppo_envs) < 1:  # fmt: skip
+    counts = (args.rounds, args.steps, args.full_steps, args.vec_steps, args.ppo_steps,
+              args.ppo_rounds, args.ppo_envs)  # fmt: skip
+    if args.profile_steps < 0 or min(counts) < 1:
         parser.error("counts must be >= 1")
     return args
 
@@ -237,6 +241,98 @@ def part_env(args: Args) -> list[str]:
     return lines
 
 
+# -- profile ---------------------------------------------------------------------------------------
+
+
+def _section_profile(tof, steps: int) -> tuple[float, dict[str, float]]:
+    """ms per env step spent in each stage of ``ObstacleEnv.step`` (wall-clock wrappers)."""
+    import mujoco
+
+    import neurocog_gym.envs.base as base
+
+    env = gym.make(SUDDEN, max_episode_steps=-1, **({"tof": tof} if tof is not None else {}))
+    u = env.unwrapped
+    acc: dict[str, float] = {}
+
+    def wrap(obj, name, label):
+        f = getattr(obj, name)
+
+        def timed(*a, **k):
+            t = time.perf_counter()
+            r = f(*a, **k)
+            acc[label] = acc.get(label, 0.0) + time.perf_counter() - t
+            return r
+
+        setattr(obj, name, timed)
+
+    class _Mj:  # base.py calls mujoco.mj_step through its module global
+        def __getattr__(self, n):
+            return getattr(mujoco, n)
+
+        @staticmethod
+        def mj_step(*a, **k):
+            t = time.perf_counter()
+            mujoco.mj_step(*a, **k)
+            acc["mj_step (5 substeps of 2 ms)"] = (
+                acc.get("mj_step (5 substeps of 2 ms)", 0.0) + time.perf_counter() - t
+            )
+
+    original = base.mujoco
+    base.mujoco = _Mj()
+    try:
+        wrap(u.tof, "maybe_sense", "ToF sensing (robot/tof.py)")
+        wrap(u.pipeline, "step", "attention pipeline step (perception/pipeline.py)")
+        wrap(u.pipeline.net, "update", "  of which DD-GNG learning cycle (net.update)")
+        wrap(u.effectivity, "step", "effectivity (locomotion/effectivity.py)")
+        wrap(u.pool, "touching", "obstacle contact test (robot/obstacles.py touching)")
+        wrap(u, "_get_obs", "observation (envs/obstacle.py _get_obs)")
+        wrap(u, "_proprioception", "  of which proprioception (envs/base.py)")
+        wrap(u.generator, "step", "CPG + motor-neuron pools (locomotion/generator.py)")
+        wrap(u, "_sim_unstable", "fault check (envs/base.py _sim_unstable)")
+        wrap(u, "_check_action", "action check (envs/base.py _check_action)")
+        wrap(u, "_task_event", "sudden-obstacle event (envs/sudden.py)")
+        env.reset(seed=0)
+        zero = np.zeros(15, np.float32)
+        for _ in range(100):
+            env.step(zero)
+        acc.clear()
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            env.step(zero)
+        total = time.perf_counter() - t0
+    finally:
+        base.mujoco = original
+        env.close()
+    return 1e3 * total / steps, {k: 1e3 * v / steps for k, v in acc.items()}
+
+
+def part_profile(args: Args) -> list[str]:
+    from neurocog_gym.robot.tof import ToFParams
+
+    load0 = load_average()
+    default_ms, default = _section_profile(None, args.profile_steps)
+    full_ms, full = _section_profile(ToFParams.at_scale(1.0, backend="numba"), args.profile_steps)
+    load1 = load_average()
+    keys = sorted(default, key=lambda k: -default[k])
+    lines = [
+        "### Where an obstacle-env step goes",
+        "",
+        f"`{SUDDEN}`, zero actions, {args.profile_steps} steps after 100 warm-up steps (no "
+        "reset inside), each stage timed by a wall-clock wrapper; the rest is the step's own "
+        f"Python (rewards, info, outcome, Gymnasium wrappers). Load average {load0} / {load1}.",
+        "",
+        "| stage | default ms/step | share | full resolution ms/step | share |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for k in keys:
+        lines.append(
+            f"| {k} | {default[k]:.3f} | {100 * default[k] / default_ms:.0f} % "
+            f"| {full.get(k, 0.0):.3f} | {100 * full.get(k, 0.0) / full_ms:.0f} % |"
+        )
+    lines += [f"| **whole step** | {default_ms:.3f} | 100 % | {full_ms:.3f} | 100 % |", ""]
+    return lines
+
+
 # -- part ppo ------------------------------------------------------------------------------------
 
 
@@ -337,6 +433,8 @@ def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     if args.part in ("env", "all"):
         lines = part_env(args)
+        if args.profile_steps:
+            lines += part_profile(args)
         print("\n".join(lines))
         if args.out:
             atomic_write_text(args.out, "\n".join(lines) + "\n")
