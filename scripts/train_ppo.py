@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
+import importlib
 import json
 import re
 import sys
@@ -122,18 +124,20 @@ def _net_arch(text: str) -> list[int]:
     return widths
 
 
-def _make_vec_env(args: Args):
+def _make_one(env_id: str, **kwargs):
+    """Build one env; runs in each SubprocVecEnv worker, which must register the ids itself."""
     import gymnasium as gym
+
+    importlib.import_module("neurocog_gym")  # registers the NeuroCog/* ids in this process
+    return gym.make(env_id, **kwargs)
+
+
+def _make_vec_env(args: Args):
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    import neurocog_gym  # noqa: F401  (registers the ids in this process)
-
-    def make(**kwargs):
-
-        return gym.make(args.env_id, **kwargs)
-
     cls = SubprocVecEnv if args.vec == "subproc" and args.n_envs > 1 else DummyVecEnv
+    make = functools.partial(_make_one, args.env_id)
     return make_vec_env(make, n_envs=args.n_envs, seed=args.seed, vec_env_cls=cls)
 
 
