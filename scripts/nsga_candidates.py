@@ -17,6 +17,7 @@ Usage: python scripts/nsga_candidates.py runs/nsga_full [--seconds 20] [--seeds 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -217,7 +218,7 @@ def main(argv=None) -> int:
     if winners:
         w = winners[0]
         es = w["env_summary"]
-        gait = base.with_genes(
+        gait = dataclasses.replace(base, notes={}).with_genes(  # the base's notes are not ours
             X[w["index"]], name="nsga-candidate",
             tuned_by=f"neurocog tune-cpg ({ns.run}), re-evaluated by scripts/nsga_candidates.py",
             speed=float(np.mean(es["speed"])), cost_of_transport=float(np.mean(es["cot"])),

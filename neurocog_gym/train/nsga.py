@@ -55,7 +55,7 @@ import socket
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -516,8 +516,6 @@ def tune_cpg(
     Returns:
         A summary; the chosen gait is ``out/best_gait.json``.
     """
-    from dataclasses import replace
-
     from pymoo.termination.max_gen import MaximumGenerationTermination
     from tqdm import tqdm
 
@@ -644,7 +642,9 @@ def _finish(out, algorithm, config, base_gait, done, elapsed, plots) -> TuneResu
         plot_cpg_outputs(trace, out / "cpg.png")
     else:
         score = evaluator.evaluate(X[i], config.seed)
-    gait = base_gait.with_genes(
+    # Fresh notes: the base gait's own measurements (speed, CoT, clearance...) do not describe
+    # the tuned genes, so they are not carried over.
+    gait = replace(base_gait, notes={}).with_genes(
         X[i],
         name="nsga-tuned",
         tuned_by="neurocog tune-cpg (NSGA-II, §6.3)",
