@@ -102,7 +102,8 @@ class ObstacleEnv(QuadrupedEnv):
     # -- world helpers --------------------------------------------------------------------------
 
     def _yaw(self) -> float:
-        w, x, y, z = self.data.qpos[3:7]
+        w, x, y, z = self.data.qpos[3:7].tolist()
+        # NumPy's arctan2 (not math.atan2): its SIMD loop rounds differently in the last bit.
         return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
 
     def _feet(self) -> np.ndarray:

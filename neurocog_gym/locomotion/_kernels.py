@@ -1,6 +1,7 @@
 """numba kernels of the locomotion generator: Matsuoka CPG (Eq. 5-7) and motor-neuron pools
 (Eq. 8-11). Pure functions over NumPy arrays; the classes in ``cpg.py`` and ``motor.py`` own the
-state and call these once per 0.01 s control cycle."""
+state and call these once per 0.01 s control cycle.
+"""
 
 from __future__ import annotations
 

@@ -999,6 +999,61 @@ def match_surface_kernel(att_p, att_n, ref_p, ref_n, radius, cos_gate, e_pos, e_
     return s_sum / nm, t_sum / nm, nm
 
 
+_N_ENDS = 16
+
+
+@njit(cache=True)
+def _trimmed_extent(values, cnt, q_lo, gap, low, high):
+    """Both ends of ``values[:cnt]`` after the quantile cut ``q_lo`` and the stray-point walk.
+
+    The same numbers as sorting the values, cutting ``q_lo`` of them at each end and then
+    dropping an end value while its gap to the next one inwards exceeds ``gap`` (repeatedly).
+    Without a quantile cut, only the ``_N_ENDS`` smallest and largest values are needed, found
+    in one pass; a full sort is the fallback when the walk goes deeper or ``q_lo`` > 0.
+    """
+    n_end = _N_ENDS
+    if q_lo == 0.0 and cnt > 2 * n_end:
+        # The n_end smallest (ascending) and largest (descending) values, by insertion.
+        nl = 0
+        nh = 0
+        for i in range(cnt):
+            v = values[i]
+            if nl < n_end or v < low[nl - 1]:
+                j = nl if nl < n_end else n_end - 1
+                while j > 0 and low[j - 1] > v:
+                    low[j] = low[j - 1]
+                    j -= 1
+                low[j] = v
+                if nl < n_end:
+                    nl += 1
+            if nh < n_end or v > high[nh - 1]:
+                j = nh if nh < n_end else n_end - 1
+                while j > 0 and high[j - 1] < v:
+                    high[j] = high[j - 1]
+                    j -= 1
+                high[j] = v
+                if nh < n_end:
+                    nh += 1
+        a = 0
+        while a < n_end - 1 and low[a + 1] - low[a] > gap:
+            a += 1
+        b = 0
+        while b < n_end - 1 and high[b] - high[b + 1] > gap:
+            b += 1
+        if a < n_end - 1 and b < n_end - 1:
+            return low[a], high[b]
+    s = np.sort(values[:cnt])
+    lo = int(q_lo * (cnt - 1))
+    hi = cnt - 1 - lo
+    a = lo
+    b = hi
+    while a < b and s[a + 1] - s[a] > gap:
+        a += 1
+    while b > a and s[b] - s[b - 1] > gap:
+        b -= 1
+    return s[a], s[b]
+
+
 @njit(cache=True)
 def refine_objects_kernel(
     points, boxes, ground, tol, margin, fx, fy, iters, q_lo, q_top, gap, origin, nbins, umax
@@ -1077,6 +1132,8 @@ def refine_objects_kernel(
     bf = np.empty(max(m, 1))
     bl = np.empty(max(m, 1))
     bg = np.empty(max(m, 1))
+    low = np.empty(_N_ENDS)
+    high = np.empty(_N_ENDS)
     for k in range(k_n):
         # The box's ground-plane corners in the walking frame.
         f0 = np.inf
@@ -1110,32 +1167,15 @@ def refine_objects_kernel(
                     cnt += 1
             if cnt == 0:
                 break
-            sf = np.sort(bf[:cnt])
-            sl = np.sort(bl[:cnt])
-            lo = int(q_lo * (cnt - 1))
-            hi = cnt - 1 - lo
-            a = lo
-            b = hi
-            while a < b and sf[a + 1] - sf[a] > gap:
-                a += 1
-            while b > a and sf[b] - sf[b - 1] > gap:
-                b -= 1
-            nf0, nf1 = sf[a], sf[b]
-            a = lo
-            b = hi
-            while a < b and sl[a + 1] - sl[a] > gap:
-                a += 1
-            while b > a and sl[b] - sl[b - 1] > gap:
-                b -= 1
-            nl0, nl1 = sl[a], sl[b]
+            nf0, nf1 = _trimmed_extent(bf, cnt, q_lo, gap, low, high)
+            nl0, nl1 = _trimmed_extent(bl, cnt, q_lo, gap, low, high)
             if nf0 == f0 and nf1 == f1 and nl0 == l0 and nl1 == l1:
                 break
             f0, f1, l0, l1 = nf0, nf1, nl0, nl1
         if cnt == 0:
             continue
-        sz = np.sort(bz[:cnt])
         out[k, 0] = cnt
-        out[k, 1] = sz[int(q_top * (cnt - 1))] - ground
+        out[k, 1] = np.partition(bz[:cnt], int(q_top * (cnt - 1)))[int(q_top * (cnt - 1))] - ground
         out[k, 2] = l1 - l0
         out[k, 3] = f1 - f0
         out[k, 4] = f0

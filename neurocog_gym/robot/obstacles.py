@@ -66,9 +66,7 @@ class Block:
     def aabb(self) -> np.ndarray:
         """(2, 3) axis-aligned min/max corners, metres."""
         xy = self.corners_xy()
-        return np.array(
-            [[*xy.min(axis=0), 0.0], [*xy.max(axis=0), self.height]], dtype=np.float64
-        )
+        return np.array([[*xy.min(axis=0), 0.0], [*xy.max(axis=0), self.height]], dtype=np.float64)
 
     def to_json(self) -> dict:
         """JSON-ready dict (for trial logs)."""
@@ -97,6 +95,12 @@ class ObstaclePool:
         if not self.bodies:
             raise ValueError("the scene has no obstacle bodies (obstacle_0, ...)")
         self.geom_ids = np.array(self.geoms)
+        self._ngeom = int(model.ngeom)
+        self._slot_of = np.full(self._ngeom, -1, dtype=np.int64)
+        self._slot_of[self.geom_ids] = np.arange(len(self.geoms))
+        self._robot_ref = None
+        self._is_robot = np.zeros(self._ngeom, dtype=bool)
+        self._boxes = np.zeros((0, 2, 3))
         self.blocks: list[Block] = []
 
     @property
@@ -110,6 +114,7 @@ class ObstaclePool:
             data.mocap_pos[self.mocap[slot]] = (0.0, 3.0 * slot, PARK_Z)
             data.mocap_quat[self.mocap[slot]] = (1.0, 0.0, 0.0, 0.0)
         self.blocks = []
+        self._boxes = np.zeros((0, 2, 3))
 
     def place(self, model: mujoco.MjModel, data: mujoco.MjData, blocks: list[Block]) -> None:
         """Park all blocks, then put ``blocks`` in place (in slot order)."""
@@ -119,6 +124,7 @@ class ObstaclePool:
         for slot, block in enumerate(blocks):
             self._set(model, data, slot, block)
         self.blocks = list(blocks)
+        self._boxes = np.stack([b.aabb() for b in self.blocks]) if blocks else np.zeros((0, 2, 3))
         mujoco.mj_kinematics(model, data)
 
     def add(self, model: mujoco.MjModel, data: mujoco.MjData, block: Block) -> None:
@@ -128,6 +134,7 @@ class ObstaclePool:
             raise ValueError(f"all {self.capacity} obstacle slots are in use")
         self._set(model, data, slot, block)
         self.blocks.append(block)
+        self._boxes = np.stack([b.aabb() for b in self.blocks])
         mujoco.mj_kinematics(model, data)
 
     def _set(self, model, data, slot: int, block: Block) -> None:
@@ -140,22 +147,29 @@ class ObstaclePool:
         data.mocap_quat[self.mocap[slot]] = (np.cos(block.yaw / 2), 0.0, 0.0, np.sin(block.yaw / 2))
 
     def boxes(self) -> np.ndarray:
-        """(K, 2, 3) axis-aligned bounds of the placed blocks, metres."""
-        if not self.blocks:
-            return np.zeros((0, 2, 3))
-        return np.stack([b.aabb() for b in self.blocks])
+        """(K, 2, 3) axis-aligned bounds of the placed blocks, metres (a copy)."""
+        return self._boxes.copy()
 
     def touching(self, data: mujoco.MjData, robot_geoms: np.ndarray) -> np.ndarray:
         """(K,) bool: which placed blocks are in contact with a robot geom now."""
         hit = np.zeros(len(self.blocks), dtype=bool)
-        if data.ncon == 0 or not self.blocks:
+        n = data.ncon
+        if n == 0 or not self.blocks:
             return hit
-        active = self.geom_ids[: len(self.blocks)]
-        g1 = data.contact.geom1[: data.ncon]
-        g2 = data.contact.geom2[: data.ncon]
-        robot = np.isin(g1, robot_geoms) | np.isin(g2, robot_geoms)
-        for k, g in enumerate(active):
-            hit[k] = bool(np.any(robot & ((g1 == g) | (g2 == g))))
+        if self._robot_ref is not robot_geoms:
+            # Lookup tables by geom id: is it the robot's, and which block slot is it.
+            self._is_robot = np.zeros(self._ngeom, dtype=bool)
+            self._is_robot[np.asarray(robot_geoms)] = True
+            self._robot_ref = robot_geoms
+        contact = data.contact
+        g1 = contact.geom1[:n]
+        g2 = contact.geom2[:n]
+        robot = self._is_robot[g1] | self._is_robot[g2]
+        if not robot.any():
+            return hit
+        for slot in (self._slot_of[g1[robot]], self._slot_of[g2[robot]]):
+            slot = slot[(slot >= 0) & (slot < len(self.blocks))]
+            hit[slot] = True
         return hit
 
 

@@ -3,7 +3,6 @@ import numpy as np
 from neurocog_gym.locomotion.effectivity import (
     MODE_INTERRUPT,
     MODE_NONE,
-    MODE_PROVISION,
     PHASE_NONE,
     PHASE_OVER,
     PHASE_UP,

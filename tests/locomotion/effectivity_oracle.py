@@ -1,0 +1,259 @@
+"""Test oracle of the effectivity: the plain NumPy implementation the numba kernel
+(``neurocog_gym/locomotion/_effectivity_kernel.py``) replaced, kept operation for operation so
+the kernel can be checked against it on random cycles (``test_effectivity_kernel.py``).
+See ``neurocog_gym/locomotion/effectivity.py`` for the model."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from neurocog_gym.locomotion.effectivity import EffectivityParams, EffectivityState
+from neurocog_gym.robot.names import FRONT_LEGS
+
+MODE_NONE = 0
+MODE_INTERRUPT = 1
+MODE_PROVISION = 2
+
+
+def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    return bool(np.all(a[0] <= b[1]) and np.all(b[0] <= a[1]))
+
+
+PHASE_NONE = 0
+PHASE_UP = 1
+PHASE_OVER = 2
+
+
+class EffectivityOracle:
+    """Foothold and swing-path prediction and the AEF's interrupt directions (§4.2.3, §5.2).
+
+    An interrupt, once fired for a leg, follows that leg's foot through the rest of its swing
+    (closed loop, every cycle, against the box it was fired for):
+
+    * **up** while the sole is below the block's top plus ``lift_clearance``: the foot rises at
+      ``lift_speed`` and holds its ground position, backing off when it is closer than
+      ``approach_gap`` to the near face;
+    * **over** once it is high enough: it moves forward at ``carry_speed`` and keeps its height,
+      until it is past the far face; then the CPG's own stance phase sets it down beyond.
+
+    The interrupt ends when the foot is past the block, touches down, or after
+    ``max_interrupt_time``. The direction handed to the AEF is the wanted foot velocity relative
+    to the torso in its yaw frame, the quantity the AEF's inverse model learned in motor
+    babbling (``train/babbling.py``).
+    """
+
+    def __init__(self, params: EffectivityParams | None = None):
+        self.p = params or EffectivityParams()
+        self.lift_time = np.zeros(4)
+        self.was_down = np.ones(4, dtype=bool)
+        self.phase = np.zeros(4, dtype=int)
+        self.plan_box = np.zeros((4, 2, 3))
+        self.plan_start = np.zeros(4)
+        self.memory = np.zeros((0, 2, 3))
+
+    def reset(self) -> None:
+        """Forget swing timing, interrupts in progress and remembered obstacles."""
+        self.lift_time[:] = 0.0
+        self.was_down[:] = True
+        self.phase[:] = PHASE_NONE
+        self.plan_box[:] = 0.0
+        self.plan_start[:] = 0.0
+        self.memory = np.zeros((0, 2, 3))
+
+    def remember(
+        self, boxes: np.ndarray, foot: np.ndarray, torso: np.ndarray, heading: np.ndarray
+    ) -> np.ndarray:
+        """Merge the perceived boxes into the obstacle memory and return it.
+
+        The sensors look ahead; an obstacle under the body (the hind legs' business) or right at
+        the front feet is out of their view. The effectivity therefore keeps every perceived box
+        until the robot has walked past it: a new box replaces the remembered ones it overlaps,
+        and a box is forgotten once every foot is ``forget_behind`` past its far face or it is
+        ``forget_distance`` away.
+        """
+        p = self.p
+        mem = [m for m in self.memory if not any(_overlap(m, b) for b in boxes)]
+        mem += list(np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3))
+        keep = []
+        f = foot[:, :2] @ heading[:2]
+        for m in mem:
+            corners = np.array([[m[i, 0], m[j, 1]] for i in (0, 1) for j in (0, 1)])
+            far = (corners @ heading[:2]).max()
+            centre = m.mean(axis=0)
+            if f.min() > far + p.forget_behind:
+                continue
+            if np.linalg.norm(centre[:2] - torso[:2]) > p.forget_distance:
+                continue
+            keep.append(m)
+        self.memory = np.array(keep).reshape(-1, 2, 3)
+        return self.memory
+
+    def step(
+        self,
+        t: float,
+        touch: np.ndarray,
+        foot: np.ndarray,
+        hip: np.ndarray,
+        yaw: float,
+        v_body: np.ndarray,
+        boxes: np.ndarray,
+    ) -> EffectivityState:
+        """Predict footholds and swing paths and check them against ``boxes``.
+
+        Args:
+            t: time, s.
+            touch: (4,) normalised touch inputs.
+            foot: (4, 3) foot positions, m.
+            hip: (4, 3) hip positions, m.
+            yaw: torso heading, rad.
+            v_body: (3,) torso linear velocity, m/s (world).
+            boxes: (K, 2, 3) perceived obstacle boxes (min/max corners), m; merged into the
+                obstacle memory (:meth:`remember`), against which everything is checked.
+        """
+        p = self.p
+        heading = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+        boxes = self.remember(np.asarray(boxes).reshape(-1, 2, 3), foot, hip.mean(axis=0), heading)
+        down = touch > p.touch_off
+        lifted = self.was_down & ~down
+        self.lift_time[lifted] = t
+        self.was_down = down.copy()
+        swinging = ~down
+        left = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+        t_left = np.maximum(p.swing_time - (t - self.lift_time), p.min_time_left)
+        v = np.array([v_body[0], v_body[1], 0.0])
+        foothold = foot.copy()
+        for leg in range(4):
+            if swinging[leg]:
+                foothold[leg] = hip[leg] + p.reach * heading + v * t_left[leg]
+                foothold[leg, 2] = 0.0
+        grown = boxes.copy() if len(boxes) else np.zeros((0, 2, 3))
+        if len(grown):
+            grown[:, 0] -= p.margin
+            grown[:, 1] += p.margin
+        foothold_safe = np.ones(4, dtype=bool)
+        path_safe = np.ones(4, dtype=bool)
+        hit_box = -np.ones(4, dtype=int)
+        s = np.linspace(0.0, 1.0, p.n_path)
+        for leg in range(4):
+            if len(grown) == 0:
+                break
+            fh = foothold[leg]
+            inside = np.all((fh[:2] >= grown[:, 0, :2]) & (fh[:2] <= grown[:, 1, :2]), axis=1)
+            if inside.any():
+                foothold_safe[leg] = False
+                hit_box[leg] = int(np.flatnonzero(inside)[0])
+            if swinging[leg]:
+                path = (1 - s)[:, None] * foot[leg] + s[:, None] * fh
+                path[:, 2] += 4 * p.clearance * s * (1 - s)
+                lo = grown[None, :, 0] - p.foot_radius
+                hi = grown[None, :, 1] + p.foot_radius
+                inb = np.all((path[:, None] >= lo) & (path[:, None] <= hi), axis=2)
+                if inb.any():
+                    path_safe[leg] = False
+                    if hit_box[leg] < 0:
+                        hit_box[leg] = int(np.flatnonzero(inb.any(axis=0))[0])
+        # Interrupts in progress end at touch-down (after a short grace) or on time-out.
+        for leg in range(4):
+            if self.phase[leg] != PHASE_NONE:
+                age = t - self.plan_start[leg]
+                if age > p.max_interrupt_time or (down[leg] and age > 0.08):
+                    self.phase[leg] = PHASE_NONE
+        # New interrupts: a swinging leg whose path or foothold meets a box.
+        conflict = swinging & ~(foothold_safe & path_safe)
+        for leg in np.flatnonzero(conflict & (self.phase == PHASE_NONE)):
+            self.phase[leg] = PHASE_UP
+            self.plan_box[leg] = grown[hit_box[leg]]
+            self.plan_start[leg] = t
+        direction = np.zeros((4, 3))
+        target = -1
+        for leg in np.flatnonzero(self.phase != PHASE_NONE):
+            d_world = self._steer(leg, foot[leg], heading, v)
+            if d_world is None:  # past the block: the CPG sets the foot down
+                self.phase[leg] = PHASE_NONE
+                continue
+            rel = d_world - v  # relative to the torso
+            direction[leg] = (rel @ heading, rel @ left, rel[2])
+            if hit_box[leg] >= 0:
+                target = int(hit_box[leg])
+        mode = MODE_NONE
+        provision = np.zeros(3)
+        if (self.phase != PHASE_NONE).any():
+            mode = MODE_INTERRUPT
+            if target < 0 and len(boxes):
+                target = int(
+                    np.argmin(
+                        [
+                            np.linalg.norm(b.mean(axis=0)[:2] - foot[:, :2].mean(axis=0))
+                            for b in boxes
+                        ]
+                    )
+                )
+        elif len(boxes):
+            target, provision = self._provision(hip, heading, left, boxes)
+            if target >= 0:
+                mode = MODE_PROVISION
+                direction[:] = np.array([provision[0], provision[1], 0.0])
+        return EffectivityState(
+            swinging=swinging,
+            foothold=foothold,
+            foothold_safe=foothold_safe,
+            path_safe=path_safe,
+            direction=direction,
+            mode=mode,
+            provision=provision,
+            target=target,
+            phase=self.phase.copy(),
+        )
+
+    def _steer(self, leg: int, foot: np.ndarray, heading: np.ndarray, v: np.ndarray):
+        """Wanted world foot velocity of an interrupted leg, or None when it is past its box."""
+        p = self.p
+        box = self.plan_box[leg]
+        corners = np.array([[box[i, 0], box[j, 1]] for i in (0, 1) for j in (0, 1)])
+        along = corners @ heading[:2]
+        f = foot[:2] @ heading[:2]
+        d_near = along.min() - f  # foot centre to the near face, along the heading
+        d_far = along.max() - f
+        if d_far + p.foot_radius < 0.0:
+            return None
+        sole = foot[2] - p.foot_radius
+        top = box[1, 2] + p.lift_clearance
+        if self.phase[leg] == PHASE_UP and sole >= top:
+            self.phase[leg] = PHASE_OVER
+        if self.phase[leg] == PHASE_UP:
+            # Hold the ground position while rising; back off if too close to the face.
+            gap = d_near - p.foot_radius - p.approach_gap
+            vx = float(np.clip(4.0 * gap, -0.4, 0.0))
+            return vx * heading + np.array([0.0, 0.0, p.lift_speed])
+        # Over: forward, holding the sole above the top.
+        vz = float(np.clip(8.0 * (top + 0.01 - sole), -0.2, p.lift_speed))
+        return p.carry_speed * heading + np.array([0.0, 0.0, vz])
+
+    def _provision(self, hip, heading, left, boxes) -> tuple[int, np.ndarray]:
+        p = self.p
+        front = hip[list(FRONT_LEGS)].mean(axis=0)
+        best, best_d = -1, np.inf
+        lateral_best = 0.0
+        for k, box in enumerate(boxes):
+            corners = np.array([[box[i, 0], box[j, 1]] for i in (0, 1) for j in (0, 1)])
+            rel = corners - front[:2]
+            ahead = rel @ heading[:2]
+            side = rel @ left[:2]
+            if ahead.max() < 0 or ahead.min() > p.lookahead:
+                continue
+            # The box blocks the corridor if its lateral extent overlaps [-corridor, corridor].
+            if side.min() > p.corridor or side.max() < -p.corridor:
+                continue
+            d = max(ahead.min(), 0.0)
+            if d < p.near:
+                continue
+            if d < best_d:
+                best, best_d = k, d
+                # Move to the side that needs the shorter side step.
+                go_left = abs(side.min() - p.corridor) > abs(side.max() + p.corridor)
+                need = (side.max() + p.corridor) if go_left else (p.corridor - side.min())
+                lateral_best = (1.0 if go_left else -1.0) * min(1.0, 0.4 + 2.5 * need)
+        if best < 0:
+            return -1, np.zeros(3)
+        slow = -0.3 if best_d < 0.6 else 0.0
+        return best, np.array([slow, lateral_best, 0.0])
