@@ -80,6 +80,8 @@ class SuddenObstacleEnv(ObstacleEnv):
         self._front_down = np.ones(2, dtype=bool)
 
     def _task_event(self) -> None:
+        if self.appeared_at is not None:
+            return  # one sudden obstacle per episode
         touch = self.touch()
         down = touch[list(FRONT_LEGS)] > self.effectivity.p.touch_off
         lifted = self._front_down & ~down

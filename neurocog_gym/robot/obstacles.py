@@ -161,15 +161,15 @@ class ObstaclePool:
             self._is_robot = np.zeros(self._ngeom, dtype=bool)
             self._is_robot[np.asarray(robot_geoms)] = True
             self._robot_ref = robot_geoms
-        contact = data.contact
-        g1 = contact.geom1[:n]
-        g2 = contact.geom2[:n]
-        robot = self._is_robot[g1] | self._is_robot[g2]
-        if not robot.any():
-            return hit
-        for slot in (self._slot_of[g1[robot]], self._slot_of[g2[robot]]):
-            slot = slot[(slot >= 0) & (slot < len(self.blocks))]
-            hit[slot] = True
+        geom = data.contact.geom[:n]  # (n, 2) geom ids of each contact
+        slot = self._slot_of[geom]
+        if slot.max() < 0:
+            return hit  # no contact involves a block
+        robot = self._is_robot[geom]
+        # A block touches the robot when the other geom of one of its contacts is the robot's.
+        for s, other in ((slot[:, 0], robot[:, 1]), (slot[:, 1], robot[:, 0])):
+            s = s[other & (s >= 0) & (s < len(self.blocks))]
+            hit[s] = True
         return hit
 
 
