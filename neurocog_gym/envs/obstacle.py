@@ -209,7 +209,7 @@ class ObstacleEnv(QuadrupedEnv):
             "touched": self.touched,
             "touch_events": self.touch_events,
             "fell": fell,
-            "obstacles": [b.to_json() for b in self.pool.blocks],
+            "obstacles": self.pool.blocks_json(),
             "aef_mode": int(self.eff.mode) if self.eff is not None else 0,
         }
 

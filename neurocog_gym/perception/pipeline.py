@@ -35,7 +35,7 @@ sparse nets of Table 2 (``scripts/bench_affordance_accuracy.py``). Two checks ri
 
 from __future__ import annotations
 
-import dataclasses
+import math
 import time
 from dataclasses import dataclass
 
@@ -93,8 +93,13 @@ class PipelineParams:
             raise ValueError(f"PipelineParams.hold must be >= 0, got {self.hold}")
 
 
-def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
-    return bool(np.all(a[0] <= b[1]) and np.all(b[0] <= a[1]))
+def _overlap(a, b) -> bool:
+    """Do boxes ``[[x0, y0, z0], [x1, y1, z1]]`` (nested lists of floats) overlap?"""
+    (a0, a1), (b0, b1) = a, b
+    return (
+        a0[0] <= b1[0] and a0[1] <= b1[1] and a0[2] <= b1[2]
+        and b0[0] <= a1[0] and b0[1] <= a1[1] and b0[2] <= a1[2]
+    )  # fmt: skip
 
 
 class AttentionPipeline:
@@ -211,7 +216,9 @@ class AttentionPipeline:
         objects = list(aff.objects)
         g = float(aff.ground_z)
         relabelled = False
-        for row, i in zip(res, idx, strict=True):
+        # Scalar arithmetic on Python floats (the same IEEE operations as NumPy's, without its
+        # per-call overhead on 4-element arrays).
+        for row, i in zip(res.tolist(), idx, strict=True):
             if not row[0] > 0 and p.verify:
                 # Not one raw point stands above the floor round it: a GNG artefact (e.g. a
                 # node behind a new obstacle pulled up by the points on its top), not an object.
@@ -224,16 +231,14 @@ class AttentionPipeline:
             f0, f1, l0, l1 = row[4:8]
             # Raw-point spacing on the object, sqrt(footprint / points): the outermost samples
             # stop short of an edge by about half a spacing on each side.
-            e = 0.5 * p.refine_edge * float(np.sqrt(max(f1 - f0, 0.0) * max(l1 - l0, 0.0) / row[0]))
+            e = 0.5 * p.refine_edge * math.sqrt(max(f1 - f0, 0.0) * max(l1 - l0, 0.0) / row[0])
             f0, f1, l0, l1 = f0 - e, f1 + e, l0 - e, l1 + e
-            cx = np.array([f0, f1, f1, f0]) * fx - np.array([l0, l0, l1, l1]) * fy
-            cy = np.array([f0, f1, f1, f0]) * fy + np.array([l0, l0, l1, l1]) * fx
+            cx = (f0 * fx - l0 * fy, f1 * fx - l0 * fy, f1 * fx - l1 * fy, f0 * fx - l1 * fy)
+            cy = (f0 * fy + l0 * fx, f1 * fy + l0 * fx, f1 * fy + l1 * fx, f0 * fy + l1 * fx)
             box = np.array(
-                [[cx.min(), cy.min(), min(o.box[0, 2], g)], [cx.max(), cy.max(), g + row[1]]]
+                [[min(cx), min(cy), min(float(o.box[0, 2]), g)], [max(cx), max(cy), g + row[1]]]
             )
-            o = o._replace(
-                height=float(row[1]), width=float(l1 - l0), length=float(f1 - f0), box=box
-            )
+            o = o._replace(height=row[1], width=l1 - l0, length=f1 - f0, box=box)
             if p.view_cut >= 0.0 and row[8] <= p.view_cut and row[1] >= p.min_height:
                 # The top of the field of view cuts this surface off: what is seen is the foot
                 # of something taller (a wall beyond the 45°-pitched sensors' reach), not a
@@ -241,6 +246,7 @@ class AttentionPipeline:
                 o = o._replace(kind="wall", suspected=False)
                 relabelled = True
             objects[i] = o
+        kinds, sboxes = aff.label_kinds, aff.suspected_boxes
         if relabelled:
             kinds = tuple(o.kind for o in objects)
             boxes_s = [
@@ -249,10 +255,10 @@ class AttentionPipeline:
                 if o.kind == "object" and o.suspected
             ]
             sboxes = np.array(boxes_s).reshape(-1, 2, 3)
-            return dataclasses.replace(
-                aff, objects=objects, label_kinds=kinds, suspected_boxes=sboxes
-            )
-        return dataclasses.replace(aff, objects=objects)
+        return Affordances(
+            objects, sboxes, aff.facets, aff.facet_normals, aff.facet_labels, kinds,
+            aff.ground_z, aff.truncated,
+        )  # fmt: skip
 
     def _remember(self, aff: Affordances, t: float) -> None:
         pad = self.affordance_params.suspect_padding
@@ -261,13 +267,17 @@ class AttentionPipeline:
             for o in aff.obstacles
             if o.height >= self.params.min_height
         ]
-        boxes = list(self.memory_boxes)
-        times = list(self.memory_time)
+        if not found and not (t - self.memory_time > self.params.hold).any():
+            return  # nothing new and nothing expired (the memory never exceeds max_boxes)
+        # Boxes as nested lists of floats: the overlap tests are plain comparisons.
+        boxes = self.memory_boxes.tolist()
+        times = self.memory_time.tolist()
         for box in found:
-            keep = [i for i, b in enumerate(boxes) if not _overlap(b, box)]
-            boxes = [boxes[i] for i in keep] + [box]
+            b = box.tolist()
+            keep = [i for i, m in enumerate(boxes) if not _overlap(m, b)]
+            boxes = [boxes[i] for i in keep] + [b]
             times = [times[i] for i in keep] + [t]
         alive = [i for i, tm in enumerate(times) if t - tm <= self.params.hold]
         alive = alive[-self.params.max_boxes :]
-        self.memory_boxes = np.array([boxes[i] for i in alive]).reshape(-1, 2, 3)
+        self.memory_boxes = np.array([boxes[i] for i in alive], dtype=np.float64).reshape(-1, 2, 3)
         self.memory_time = np.array([times[i] for i in alive], dtype=np.float64)

@@ -101,6 +101,7 @@ class ObstaclePool:
         self._robot_ref = None
         self._is_robot = np.zeros(self._ngeom, dtype=bool)
         self._boxes = np.zeros((0, 2, 3))
+        self._json: list[dict] | None = None
         self.blocks: list[Block] = []
 
     @property
@@ -114,6 +115,7 @@ class ObstaclePool:
             data.mocap_pos[self.mocap[slot]] = (0.0, 3.0 * slot, PARK_Z)
             data.mocap_quat[self.mocap[slot]] = (1.0, 0.0, 0.0, 0.0)
         self.blocks = []
+        self._json = None
         self._boxes = np.zeros((0, 2, 3))
 
     def place(self, model: mujoco.MjModel, data: mujoco.MjData, blocks: list[Block]) -> None:
@@ -124,6 +126,7 @@ class ObstaclePool:
         for slot, block in enumerate(blocks):
             self._set(model, data, slot, block)
         self.blocks = list(blocks)
+        self._json = None
         self._boxes = np.stack([b.aabb() for b in self.blocks]) if blocks else np.zeros((0, 2, 3))
         mujoco.mj_kinematics(model, data)
 
@@ -134,6 +137,7 @@ class ObstaclePool:
             raise ValueError(f"all {self.capacity} obstacle slots are in use")
         self._set(model, data, slot, block)
         self.blocks.append(block)
+        self._json = None
         self._boxes = np.stack([b.aabb() for b in self.blocks])
         mujoco.mj_kinematics(model, data)
 
@@ -145,6 +149,12 @@ class ObstaclePool:
         model.geom_aabb[g] = (0.0, 0.0, 0.0, *half)
         data.mocap_pos[self.mocap[slot]] = block.center
         data.mocap_quat[self.mocap[slot]] = (np.cos(block.yaw / 2), 0.0, 0.0, np.sin(block.yaw / 2))
+
+    def blocks_json(self) -> list[dict]:
+        """The placed blocks as JSON-ready dicts (fresh copies; for trial logs and ``info``)."""
+        if self._json is None:
+            self._json = [b.to_json() for b in self.blocks]
+        return [dict(d) for d in self._json]
 
     def boxes(self) -> np.ndarray:
         """(K, 2, 3) axis-aligned bounds of the placed blocks, metres (a copy)."""
