@@ -233,7 +233,17 @@ def train(args: Args) -> dict:
     done_before = int(model.num_timesteps)
     remaining = args.total_steps - done_before
     outcome = _outcome_callback()
-    checkpoint = CheckpointCallback(
+    class AtomicCheckpoint(CheckpointCallback):
+        """SB3's checkpoint callback writing through a temp file and a rename (a kill during a
+        save would otherwise leave a truncated zip that ``--resume`` then picks as newest)."""
+
+        def _on_step(self) -> bool:
+            if self.n_calls % self.save_freq == 0:
+                with atomic_path(Path(self._checkpoint_path(extension="zip"))) as tmp:
+                    self.model.save(tmp)
+            return True
+
+    checkpoint = AtomicCheckpoint(
         save_freq=max(1, args.checkpoint_every // args.n_envs),
         save_path=str(out / "checkpoints"),
         name_prefix="ppo",

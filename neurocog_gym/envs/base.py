@@ -99,6 +99,14 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
             camera_name=camera_name,
             **kwargs,
         )
+        if camera_name is not None and (
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name) < 0
+        ):
+            cams = [self.model.camera(i).name for i in range(self.model.ncam)]
+            raise ValueError(
+                f"unknown camera_name {camera_name!r}: the scene's cameras are "
+                f"{', '.join(cams) or 'none'} (or None for the free camera)"
+            )
         self.robot = RobotIndex.build(self.model)
         self.generator = LocomotionGenerator(
             self.gait, self.robot.joint_lo, self.robot.joint_hi, dt=self.dt

@@ -161,3 +161,9 @@ def test_default_gait_walks_10s_at_half_a_metre_per_second():
             xs.append(info["x_position"])
         speed = (xs[-1] - xs[199]) / 8.0
         assert 0.4 <= speed <= 0.6, (seed, speed)
+
+
+def test_unknown_camera_name_is_a_clear_error():
+    with pytest.raises(ValueError, match="unknown camera_name 'nosuchcam': the scene's cameras are .*follow"):
+        gym.make("NeuroCog/Walk-v0", camera_name="nosuchcam")
+    gym.make("NeuroCog/Walk-v0", camera_name=None).close()  # the free camera stays available

@@ -133,3 +133,23 @@ def test_a_failed_write_leaves_the_old_file_and_no_temp(tmp_path):
     with io.atomic_path(target) as tmp:
         tmp.write_text('{"v": 3}')
     assert target.read_text() == '{"v": 3}'
+
+
+def test_written_files_get_ordinary_permissions(tmp_path):
+    """A new file gets what open() would give it (0o666 less the umask), not mkstemp's 0o600;
+    a replaced file keeps its own mode."""
+    import os
+
+    mask = os.umask(0o022)
+    try:
+        io.atomic_write_text(tmp_path / "new.json", "{}")
+        assert (tmp_path / "new.json").stat().st_mode & 0o777 == 0o644
+        with io.atomic_path(tmp_path / "video.mp4") as tmp:
+            tmp.write_bytes(b"x")
+        assert (tmp_path / "video.mp4").stat().st_mode & 0o777 == 0o644
+        (tmp_path / "private.json").write_text("{}")
+        (tmp_path / "private.json").chmod(0o600)
+        io.atomic_write_text(tmp_path / "private.json", "[]")
+        assert (tmp_path / "private.json").stat().st_mode & 0o777 == 0o600
+    finally:
+        os.umask(mask)

@@ -74,10 +74,10 @@ def test_policies_on_an_observation():
     assert np.all(a[:12] == 0) and a[13] > 0.3  # side step to the left
 
 
-def test_cli_train_aef_bad_arguments():
+def test_cli_train_aef_bad_arguments(tmp_path):
     r = subprocess.run([sys.executable, "-m", "neurocog_gym.cli", "train-aef", "--samples", "-5"],
                        capture_output=True, text=True)  # fmt: skip
     assert r.returncode != 0 and "Traceback" not in r.stderr
     r = subprocess.run([sys.executable, "-m", "neurocog_gym.cli", "train-aef", "--samples", "10",
-                        "--out", "/tmp/neurocog_test_aef_bad"], capture_output=True, text=True)  # fmt: skip
+                        "--out", str(tmp_path / "bad")], capture_output=True, text=True)  # fmt: skip
     assert r.returncode == 2 and "at least 100" in r.stderr and "Traceback" not in r.stderr
