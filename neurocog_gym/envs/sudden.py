@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from neurocog_gym.envs.obstacle import ObstacleEnv
@@ -19,6 +20,10 @@ class SuddenObstacleEnv(ObstacleEnv):
     by side) is placed across that leg's swing path: the block's near face lies between the foot
     and its predicted foothold, so an unchanged swing runs into it or lands on it. Heights are the
     paper's 6, 7, 8 cm with ±5 mm jitter; lengths 5-12 cm along the path, widths 10-30 cm.
+    The blocks are placed in front of the robot, never into it: a placement that comes closer
+    than ``min_gap`` to a robot geom (the other front leg often stands where a wide block would
+    go) is drawn again, up to ``placement_tries`` times, and if none fits, the block appears at
+    the next front-leg lift-off instead.
 
     ## Action space, observation space
 
@@ -48,6 +53,7 @@ class SuddenObstacleEnv(ObstacleEnv):
     ## Arguments
 
     As ``WalkEnv``, plus ``appear_window`` (s, default (1.0, 2.0)), ``pair_probability`` (0.3),
+    ``min_gap`` (m, 0.01: closest a new block may come to the robot), ``placement_tries`` (5),
     ``tof`` (``ToFParams``), ``perception`` (``PipelineParams``: ``gng="gng"`` switches the
     attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``.
     """
@@ -56,6 +62,8 @@ class SuddenObstacleEnv(ObstacleEnv):
         self,
         appear_window: tuple[float, float] = (1.0, 2.0),
         pair_probability: float = 0.3,
+        min_gap: float = 0.01,
+        placement_tries: int = 5,
         **kwargs,
     ):
         lo, hi = appear_window
@@ -63,20 +71,27 @@ class SuddenObstacleEnv(ObstacleEnv):
             raise ValueError(f"appear_window must be (lo, hi) with 0 <= lo <= hi, got {appear_window}")
         if not 0.0 <= pair_probability <= 1.0:
             raise ValueError(f"pair_probability must be in [0, 1], got {pair_probability}")
+        if not min_gap >= 0.0:
+            raise ValueError(f"min_gap must be >= 0 m, got {min_gap}")
+        if int(placement_tries) < 1:
+            raise ValueError(f"placement_tries must be >= 1, got {placement_tries}")
         self.appear_window = (float(lo), float(hi))
         self.pair_probability = float(pair_probability)
+        self.min_gap = float(min_gap)
+        self.placement_tries = int(placement_tries)
         super().__init__(**kwargs)
         from gymnasium.utils import EzPickle
 
         EzPickle.__init__(
             self, appear_window=appear_window, pair_probability=pair_probability,
-            **self._ezpickle_kwargs,
+            min_gap=min_gap, placement_tries=placement_tries, **self._ezpickle_kwargs,
         )  # fmt: skip
 
     def _place_initial_obstacles(self) -> None:
         self.appear_after = float(self.np_random.uniform(*self.appear_window))
         self.appeared_at = None
         self.appear_leg = -1
+        self.rejected_swings = 0
         self._front_down = np.ones(2, dtype=bool)
 
     def _task_event(self) -> None:
@@ -86,9 +101,22 @@ class SuddenObstacleEnv(ObstacleEnv):
         down = touch[list(FRONT_LEGS)] > self.effectivity.p.touch_off
         lifted = self._front_down & ~down
         self._front_down = down
-        if self.appeared_at is not None or self.data.time < self.appear_after or not lifted.any():
+        if self.data.time < self.appear_after or not lifted.any():
             return
         leg = FRONT_LEGS[int(np.flatnonzero(lifted)[0])]
+        for _ in range(self.placement_tries):
+            for b in self._draw_blocks(leg):
+                self.pool.add(self.model, self.data, b)
+            if self._gap_to_robot() >= self.min_gap:
+                self.appeared_at = float(self.data.time)
+                self.appear_leg = int(leg)
+                return
+            # Placed by hand in front of the robot, never into it: take the blocks away again.
+            self.pool.place(self.model, self.data, [])
+        self.rejected_swings += 1  # no free spot in this swing's path: wait for the next one
+
+    def _draw_blocks(self, leg: int) -> list[Block]:
+        """The block (and maybe its neighbour) across the swing path of ``leg``."""
         rng = self.np_random
         p = self.effectivity.p
         yaw = self._yaw()
@@ -110,15 +138,23 @@ class SuddenObstacleEnv(ObstacleEnv):
             offset = side * (block.width + other.width) / 2 * np.array([-heading[1], heading[0]])
             c2 = centre + offset + float(rng.uniform(-0.03, 0.03)) * heading
             blocks.append(Block(c2[0], c2[1], other.length, other.width, other.height, yaw + other.yaw))
-        for b in blocks:
-            self.pool.add(self.model, self.data, b)
-        self.appeared_at = float(self.data.time)
-        self.appear_leg = int(leg)
+        return blocks
+
+    def _gap_to_robot(self) -> float:
+        """Smallest distance between a placed block and a robot geom, m (< 0: they overlap)."""
+        m, d = self.model, self.data
+        cap = 1.0
+        return min(
+            mujoco.mj_geomDistance(m, d, int(g), int(r), cap, None)
+            for g in self.pool.geom_ids[: len(self.pool.blocks)]
+            for r in self.robot.robot_geoms
+        )
 
     def _outcome(self, fell: bool, unstable: bool) -> dict:
         out = super()._outcome(fell, unstable)
         out["appeared_at"] = self.appeared_at
         out["appear_leg"] = self.appear_leg
+        out["rejected_swings"] = self.rejected_swings
         return out
 
     def _reward(self, x_vel: float, power: float) -> tuple[float, dict]:

@@ -39,6 +39,28 @@ def test_sudden_obstacle_appears_in_the_swing_path_of_a_front_leg():
         assert 0.055 <= box[1, 2] <= 0.085
 
 
+def test_sudden_obstacle_never_appears_inside_the_robot():
+    """Placed by hand in front of the robot, not into it: at appearance every block keeps
+    min_gap from every robot geom. (Without the placement check, 18 of the first 100 benchmark
+    trials dropped a wide block onto the other front leg.)"""
+    from neurocog_gym.bench.runner import trial_seed
+
+    env = gym.make(SUDDEN)
+    u = env.unwrapped
+    gaps = []
+    for i in range(30):
+        env.reset(seed=trial_seed(0, "sudden", i))
+        _walk_until(env, lambda info: u.appeared_at is not None)
+        assert u.appeared_at is not None
+        gaps.append(min(
+            mujoco.mj_geomDistance(u.model, u.data, int(g), int(r), 1.0, None)
+            for g in u.pool.geom_ids[: len(u.pool.blocks)] for r in u.robot.robot_geoms
+        ))  # fmt: skip
+    assert min(gaps) >= u.min_gap - 1e-9
+    with pytest.raises(ValueError, match="min_gap"):
+        gym.make(SUDDEN, min_gap=-0.01)
+
+
 def test_static_obstacles_lie_ahead_across_the_path():
     env = gym.make(STATIC)
     env.reset(seed=0)
