@@ -215,18 +215,20 @@ class ObstacleEnv(QuadrupedEnv):
 
     # -- observation ----------------------------------------------------------------------------
 
-    def _objects(self) -> tuple[np.ndarray, np.ndarray, tuple]:
+    def _objects(self, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple]:
+        """The K nearest objects ahead in the torso's yaw frame (``rot``: world to yaw frame)."""
         out = np.zeros((N_OBJECTS, len(OBJECT_FIELDS)), np.float32)
         mask = np.zeros(N_OBJECTS, np.float32)
         aff = self.pipeline.last
         best = (0.0, 0.0, 0.0)
         if aff is None:
             return out, mask, best
+        min_height = self.pipeline.params.min_height
+        objs = [o for o in aff.objects if o.kind == "object" and o.height >= min_height]
+        if not objs:
+            return out, mask, best
         torso = self.data.xpos[self.robot.torso_body]
-        yaw = self._yaw()
-        c, s = np.cos(yaw), np.sin(yaw)
-        objs = [o for o in aff.obstacles if o.height >= self.pipeline.params.min_height]
-        rel = [np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]]) @ (o.position - torso) for o in objs]
+        rel = [rot @ (o.position - torso) for o in objs]
         order = np.argsort([np.hypot(r[0], r[1]) + (10 if r[0] < 0 else 0) for r in rel])
         for slot, k in enumerate(order[:N_OBJECTS]):
             o = objs[k]
@@ -239,10 +241,11 @@ class ObstacleEnv(QuadrupedEnv):
 
     def _get_obs(self) -> dict[str, np.ndarray]:
         obs = self._proprioception()
-        objects, mask, (a_h, a_w, a_s) = self._objects()
-        eff = self.eff
         yaw = self._yaw()
         c, s = np.cos(yaw), np.sin(yaw)
+        rot = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+        objects, mask, (a_h, a_w, a_s) = self._objects(rot)
+        eff = self.eff
         torso = self.data.xpos[self.robot.torso_body]
         if eff is None:
             direction = np.zeros((4, 3))
@@ -251,7 +254,6 @@ class ObstacleEnv(QuadrupedEnv):
             mode = 0
         else:
             direction = eff.direction
-            rot = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
             foothold = (eff.foothold - torso) @ rot.T
             safe = (eff.foothold_safe & eff.path_safe).astype(np.int8)
             mode = int(eff.mode)

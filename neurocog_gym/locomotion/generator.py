@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from neurocog_gym.locomotion._kernels import drive_kernel
 from neurocog_gym.locomotion.cpg import CPGParams, MatsuokaCPG
 from neurocog_gym.locomotion.gait import Gait
 from neurocog_gym.locomotion.motor import MotorNeuronPools, MotorParams
@@ -136,22 +137,16 @@ class LocomotionGenerator:
         self.elapsed = 0.0
         self.pools.reset(self.posture)
 
-    def _drive(self, y: np.ndarray) -> np.ndarray:
-        yf = y[_JOINT_NEURONS[:, 0]]
-        ye = y[_JOINT_NEURONS[:, 1]]
-        s_sag, s_cor, s_dir = self.provision
-        drive = self.g_flex * yf - self.g_ext * ye
-        # Hip drive is negative while the leg protracts (swing); the foot then moves to +y.
-        protraction = drive[HIP_JOINTS].copy()
-        scale = (1.0 + self.prov.sag_gain * s_sag) * (1.0 - self.prov.dir_gain * s_dir * _SIDE)
-        drive[HIP_JOINTS] *= scale
-        lateral = (
-            self.prov.cor_gain * s_cor * (1.0 + self.prov.cor_front_bias * _FRONT)
-            + self.prov.dir_steer * s_dir * _FRONT
-        )
-        drive[ABDUCT_JOINTS] += -lateral * protraction
-        self.hip_drive[:] = yf[HIP_JOINTS] - ye[HIP_JOINTS]
-        return drive
+    def _drive(self, y: np.ndarray) -> None:
+        """Joint drives into ``self.drive`` and hip drives into ``self.hip_drive`` (one numba
+        call, ``_kernels.drive_kernel``). Hip drive is negative while the leg protracts (swing);
+        the foot then moves to +y under a positive s_COR."""
+        p = self.prov
+        drive_kernel(
+            y, _JOINT_NEURONS, self.g_flex, self.g_ext, self.provision, p.sag_gain, p.dir_gain,
+            p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS, ABDUCT_JOINTS,
+            self.drive, self.hip_drive,
+        )  # fmt: skip
 
     def step(self, provision, interrupt, theta, theta_dot, touch) -> np.ndarray:
         """One control cycle.
@@ -169,7 +164,7 @@ class LocomotionGenerator:
         a = self.dt / max(self.prov.provision_tau, self.dt)
         self.provision += a * (np.asarray(provision, dtype=np.float64) - self.provision)
         y = self.cpg.step(touch)
-        self.drive[:] = self._drive(y)
+        self._drive(y)
         self.elapsed += self.dt
         if self.elapsed < self.prov.start_ramp:
             self.drive *= self.elapsed / self.prov.start_ramp
