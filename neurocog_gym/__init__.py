@@ -26,7 +26,9 @@ ENV_IDS: tuple[str, ...] = (
     "NeuroCog/StaticObstacle-v0",
 )
 
-register(id="NeuroCog/Walk-v0", entry_point="neurocog_gym.envs.walk:WalkEnv", max_episode_steps=2000)
+register(
+    id="NeuroCog/Walk-v0", entry_point="neurocog_gym.envs.walk:WalkEnv", max_episode_steps=2000
+)
 register(
     id="NeuroCog/SuddenObstacle-v0",
     entry_point="neurocog_gym.envs.sudden:SuddenObstacleEnv",

@@ -204,7 +204,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="walk (video, gait plot), then a short obstacle benchmark",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
     p.add_argument("--out", default="runs/demo", help="output folder")
-    p.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated seconds of walking")
+    p.add_argument(
+        "--seconds", type=_positive_float, default=20.0, help="simulated seconds of walking"
+    )
     p.add_argument("--seed", type=_nonneg_int, default=0, help="episode seed")
     p.add_argument("--no-video", action="store_true", help="skip the video (faster)")
     p.add_argument("--trials", type=_nonneg_int, default=4,

@@ -11,8 +11,18 @@ from __future__ import annotations
 from pathlib import Path
 
 ORDER = [
-    "walk", "tof", "gng", "affordance", "perception", "attention", "nsga", "env", "aef", "bench",
-    "ppo", "soak",
+    "walk",
+    "tof",
+    "gng",
+    "affordance",
+    "perception",
+    "attention",
+    "nsga",
+    "env",
+    "aef",
+    "bench",
+    "ppo",
+    "soak",
 ]
 
 

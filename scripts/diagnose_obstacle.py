@@ -28,7 +28,10 @@ def diagnose(env, policy, seed: int) -> dict:
     u = env.unwrapped
     obs, info = env.reset(seed=seed)
     m = u.model
-    names = {g: mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}" for g in u.robot.robot_geoms}
+    names = {
+        g: mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
+        for g in u.robot.robot_geoms
+    }
     first_seen = first_int = first_prov = None
     contacts: dict[str, float] = {}
     foot_peak = np.zeros(4)
@@ -84,9 +87,13 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--attention", default="on", choices=["on", "off"])
-    ap.add_argument("--weights", default=None, help="AEF weights (.npz) instead of the shipped ones")
+    ap.add_argument(
+        "--weights", default=None, help="AEF weights (.npz) instead of the shipped ones"
+    )
     ap.add_argument("--start", type=int, default=0, help="first trial index")
-    ap.add_argument("--gain", type=float, default=1.0, help="AEFPolicy interrupt_gain (with --weights)")
+    ap.add_argument(
+        "--gain", type=float, default=1.0, help="AEFPolicy interrupt_gain (with --weights)"
+    )
     args = ap.parse_args()
     env = make_env(args.scenario, args.attention, None)
     if args.weights:

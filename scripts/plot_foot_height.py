@@ -56,7 +56,9 @@ def main() -> None:
     seed = trial_seed(args.seed, "sudden", args.index)
     names = [p.strip() for p in args.policies.split(",")]
     runs = {name: record(name, seed) for name in names}
-    fig, axes = plt.subplots(len(names), 1, figsize=(9, 2.8 * len(names)), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(
+        len(names), 1, figsize=(9, 2.8 * len(names)), sharex=True, squeeze=False
+    )
     for ax, name in zip(axes[:, 0], names, strict=True):
         r = runs[name]
         for leg in (0, 1):

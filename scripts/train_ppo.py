@@ -233,6 +233,7 @@ def train(args: Args) -> dict:
     done_before = int(model.num_timesteps)
     remaining = args.total_steps - done_before
     outcome = _outcome_callback()
+
     class AtomicCheckpoint(CheckpointCallback):
         """SB3's checkpoint callback writing through a temp file and a rename (a kill during a
         save would otherwise leave a truncated zip that ``--resume`` then picks as newest)."""

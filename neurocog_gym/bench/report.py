@@ -78,7 +78,9 @@ def run_label(config: dict) -> str:
     policy = str(config.get("policy") or "?")
     if policy not in ("aef", "aef-provision", "blind"):
         policy = Path(policy).stem
-    name = {"aef": "AEF", "aef-provision": "AEF provision only", "blind": "blind"}.get(policy, policy)
+    name = {"aef": "AEF", "aef-provision": "AEF provision only", "blind": "blind"}.get(
+        policy, policy
+    )
     return f"{name}, attention {config.get('attention') or 'on'}"
 
 

@@ -227,9 +227,7 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         self._warnings_seen = n_warn
         # A NaN or inf anywhere makes the sum / the maximum non-finite (and fails the test).
         return bool(
-            new
-            or not math.isfinite(float(d.qpos.sum()))
-            or not float(np.abs(d.qvel).max()) <= 1e3
+            new or not math.isfinite(float(d.qpos.sum())) or not float(np.abs(d.qvel).max()) <= 1e3
         )
 
     def _fell(self) -> bool:
@@ -256,7 +254,9 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
             info = {"sim_unstable": True}
             return obs, 0.0, False, True, info
         dof = self.robot.dof_adr
-        power = float(np.sum(np.abs(self.data.actuator_force[self.robot.actuator] * self.data.qvel[dof])))
+        power = float(
+            np.sum(np.abs(self.data.actuator_force[self.robot.actuator] * self.data.qvel[dof]))
+        )
         self._power = power
         x_vel = (float(self.data.qpos[0]) - x_before) / self.dt
         self._after_physics()

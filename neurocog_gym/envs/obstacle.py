@@ -95,8 +95,12 @@ class ObstacleEnv(QuadrupedEnv):
         s["foothold_safe"] = spaces.MultiBinary(4)
         if self.include_graph:
             s["graph_nodes"] = spaces.Box(-np.inf, np.inf, (self.graph_max_nodes, 3), f32)
-            s["graph_edges"] = spaces.Box(-1, self.graph_max_nodes, (self.graph_max_edges, 2), np.int64)
-            s["graph_counts"] = spaces.Box(0, max(self.graph_max_nodes, self.graph_max_edges), (2,), np.int64)
+            s["graph_edges"] = spaces.Box(
+                -1, self.graph_max_nodes, (self.graph_max_edges, 2), np.int64
+            )
+            s["graph_counts"] = spaces.Box(
+                0, max(self.graph_max_nodes, self.graph_max_edges), (2,), np.int64
+            )
         return s
 
     # -- world helpers --------------------------------------------------------------------------
@@ -117,12 +121,15 @@ class ObstacleEnv(QuadrupedEnv):
             return
         yaw = self._yaw()
         forward = (np.cos(yaw), np.sin(yaw), 0.0)
-        self.pipeline.step(self.frame.points, self.frame.origins.mean(axis=0), self.data.time, forward)
+        self.pipeline.step(
+            self.frame.points, self.frame.origins.mean(axis=0), self.data.time, forward
+        )
         self.perception_time += self.pipeline.timings["total"]
 
     def perceived_boxes(self) -> np.ndarray:
         """(K, 2, 3) the objects' boxes in the attention memory, without the attention padding
-        (the DD-GNG samples a padded box; the effectivity checks the object itself)."""
+        (the DD-GNG samples a padded box; the effectivity checks the object itself).
+        """
         boxes = self.pipeline.attention_boxes.copy()
         if len(boxes):
             pad = self.pipeline.affordance_params.suspect_padding
@@ -278,7 +285,8 @@ class ObstacleEnv(QuadrupedEnv):
     def render(self):
         """``rgb_array``/``human``: the scene with the DD-GNG graph, its labels, the attention
         boxes and the predicted footholds drawn in (``draw_overlay``); ``depth_array``: the four
-        ToF depth images side by side, (H, 4 W) float32 metres, 0 where invalid."""
+        ToF depth images side by side, (H, 4 W) float32 metres, 0 where invalid.
+        """
         if self.render_mode == "depth_array":
             if self.frame is None:
                 self._sense_and_perceive(force_frame=True)
@@ -320,7 +328,8 @@ def _segment_marker(a: np.ndarray, b: np.ndarray, radius: float, rgba: np.ndarra
 
 def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
     """Visual markers of the perception state: graph nodes and edges coloured by the kind of
-    surface their facets belong to, attention boxes, and footholds (green safe, red unsafe)."""
+    surface their facets belong to, attention boxes, and footholds (green safe, red unsafe).
+    """
     import mujoco
 
     markers: list[dict] = []
@@ -342,7 +351,9 @@ def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
     for a, b in edges[:max_edges]:
         ka, kb = node_kind.get(int(a)), node_kind.get(int(b))
         kind = ka if ka == kb else None
-        rgba = _KIND_RGBA[kind] * np.array([1, 1, 1, 0.8]) if kind else np.array([0.9, 0.9, 0.9, 0.5])
+        rgba = (
+            _KIND_RGBA[kind] * np.array([1, 1, 1, 0.8]) if kind else np.array([0.9, 0.9, 0.9, 0.5])
+        )
         markers.append(_segment_marker(nodes[a], nodes[b], 0.0025, rgba))
     for box in env.pipeline.attention_boxes:
         markers.append({"type": mujoco.mjtGeom.mjGEOM_BOX, "size": (box[1] - box[0]) / 2,

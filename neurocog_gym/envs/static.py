@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 from neurocog_gym.envs.sudden import SuddenObstacleEnv
 from neurocog_gym.robot.obstacles import Block, random_block
 

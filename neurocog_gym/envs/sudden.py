@@ -68,7 +68,9 @@ class SuddenObstacleEnv(ObstacleEnv):
     ):
         lo, hi = appear_window
         if not (0.0 <= lo <= hi):
-            raise ValueError(f"appear_window must be (lo, hi) with 0 <= lo <= hi, got {appear_window}")
+            raise ValueError(
+                f"appear_window must be (lo, hi) with 0 <= lo <= hi, got {appear_window}"
+            )
         if not 0.0 <= pair_probability <= 1.0:
             raise ValueError(f"pair_probability must be in [0, 1], got {pair_probability}")
         if not min_gap >= 0.0:
@@ -131,13 +133,17 @@ class SuddenObstacleEnv(ObstacleEnv):
         near = float(rng.uniform(0.45, 0.85)) * max(span, 0.05)
         centre = foot + (near + block.length / 2) * heading
         centre += float(rng.uniform(-0.03, 0.03)) * np.array([-heading[1], heading[0]])
-        blocks = [Block(centre[0], centre[1], block.length, block.width, block.height, yaw + block.yaw)]
+        blocks = [
+            Block(centre[0], centre[1], block.length, block.width, block.height, yaw + block.yaw)
+        ]
         if rng.random() < self.pair_probability:
             side = 1.0 if rng.random() < 0.5 else -1.0
             other = random_block(rng, 0.0, 0.0, yaw_range=0.25)
             offset = side * (block.width + other.width) / 2 * np.array([-heading[1], heading[0]])
             c2 = centre + offset + float(rng.uniform(-0.03, 0.03)) * heading
-            blocks.append(Block(c2[0], c2[1], other.length, other.width, other.height, yaw + other.yaw))
+            blocks.append(
+                Block(c2[0], c2[1], other.length, other.width, other.height, yaw + other.yaw)
+            )
         return blocks
 
     def _gap_to_robot(self) -> float:

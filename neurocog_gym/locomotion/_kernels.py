@@ -176,6 +176,8 @@ def drive_kernel(
         a = abduct_joints[k]
         protraction = drive[h]
         drive[h] = protraction * ((1.0 + sag_gain * s_sag) * (1.0 - dir_gain * s_dir * side[k]))
-        lateral = cor_gain * s_cor * (1.0 + cor_front_bias * front[k]) + dir_steer * s_dir * front[k]
+        lateral = (
+            cor_gain * s_cor * (1.0 + cor_front_bias * front[k]) + dir_steer * s_dir * front[k]
+        )
         drive[a] = drive[a] + -lateral * protraction
         hip_drive[k] = y[joint_neurons[h, 0]] - y[joint_neurons[h, 1]]

@@ -116,7 +116,9 @@ def build_torch_net(hidden: tuple[int, ...] = (64, 64)):
         def __init__(self):
             super().__init__()
             dims = (N_INPUTS, *hidden)
-            self.trunk = nn.ModuleList(nn.Linear(a, b) for a, b in zip(dims[:-1], dims[1:], strict=True))
+            self.trunk = nn.ModuleList(
+                nn.Linear(a, b) for a, b in zip(dims[:-1], dims[1:], strict=True)
+            )
             self.head_interrupt = nn.Linear(dims[-1], N_INTERRUPT)
             self.head_provision = nn.Linear(dims[-1], N_PROVISION)
             self.register_buffer("in_mean", torch.zeros(N_INPUTS))

@@ -112,4 +112,3 @@ class Gait:
 def default_gait() -> Gait:
     """The shipped default gait (``assets/default_gait.json``)."""
     return Gait.load(paths.asset(paths.DEFAULT_GAIT))
-

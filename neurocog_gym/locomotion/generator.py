@@ -140,7 +140,8 @@ class LocomotionGenerator:
     def _drive(self, y: np.ndarray) -> None:
         """Joint drives into ``self.drive`` and hip drives into ``self.hip_drive`` (one numba
         call, ``_kernels.drive_kernel``). Hip drive is negative while the leg protracts (swing);
-        the foot then moves to +y under a positive s_COR."""
+        the foot then moves to +y under a positive s_COR.
+        """
         p = self.prov
         drive_kernel(
             y, _JOINT_NEURONS, self.g_flex, self.g_ext, self.provision, p.sag_gain, p.dir_gain,

@@ -78,7 +78,11 @@ def _losses(net, X, yi, yp, isp):
     li = ((oi - yi) ** 2).mean(dim=1)
     lp = ((op - yp) ** 2).mean(dim=1)
     per = torch.where(isp, lp, li)
-    return per.mean(), li[~isp].mean() if (~isp).any() else li.sum() * 0, lp[isp].mean() if isp.any() else lp.sum() * 0
+    return (
+        per.mean(),
+        li[~isp].mean() if (~isp).any() else li.sum() * 0,
+        lp[isp].mean() if isp.any() else lp.sum() * 0,
+    )
 
 
 def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True) -> dict:
@@ -141,7 +145,9 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
     mp = yp[tr][isp[tr]].mean(axis=0)
     base_i = float(((yi[val][~isp[val]] - mi) ** 2).mean())
     base_p = float(((yp[val][isp[val]] - mp) ** 2).mean())
-    base = float(np.where(isp[val], ((yp[val] - mp) ** 2).mean(1), ((yi[val] - mi) ** 2).mean(1)).mean())
+    base = float(
+        np.where(isp[val], ((yp[val] - mp) ** 2).mean(1), ((yi[val] - mi) ** 2).mean(1)).mean()
+    )
 
     ckpt = out / "checkpoint.pt"
     state = {"epoch": 0, "best": np.inf, "best_epoch": 0, "history": [], "bad": 0}
@@ -166,7 +172,12 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
     if perm_rng is not None:
         # The batch order goes on where it stopped: a resumed run is the uninterrupted one.
         gen.set_state(perm_rng)
-    bar = tqdm(range(state["epoch"], cfg.epochs), desc="train-aef", unit="epoch", disable=not progress or None)
+    bar = tqdm(
+        range(state["epoch"], cfg.epochs),
+        desc="train-aef",
+        unit="epoch",
+        disable=not progress or None,
+    )
     best_weights = out / "aef_weights.npz"
     for epoch in bar:
         if state["bad"] >= cfg.patience:
@@ -182,8 +193,12 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
         net.eval()
         with torch.no_grad():
             v = torch.as_tensor(val)
-            vl, vi, vp = (float(x) for x in _losses(net, T["X"][v], T["yi"][v], T["yp"][v], isp_t[v]))
-        state["history"].append({"epoch": epoch + 1, "val_loss": vl, "val_interrupt": vi, "val_provision": vp})
+            vl, vi, vp = (
+                float(x) for x in _losses(net, T["X"][v], T["yi"][v], T["yp"][v], isp_t[v])
+            )
+        state["history"].append(
+            {"epoch": epoch + 1, "val_loss": vl, "val_interrupt": vi, "val_provision": vp}
+        )
         if vl < state["best"] - 1e-6:
             state.update(best=vl, best_epoch=epoch + 1, bad=0)
             net.export().save(best_weights)
@@ -198,7 +213,9 @@ def train_aef(cfg: AEFTrainConfig, out: str | os.PathLike, progress: bool = True
                     "config": asdict(cfg), "torch_rng": torch.get_rng_state(),
                     "perm_rng": gen.get_state()}, buf)  # fmt: skip
         nio.atomic_write_bytes(ckpt, buf.getvalue())
-    best = state["history"][state["best_epoch"] - 1] if state["best_epoch"] else state["history"][-1]
+    best = (
+        state["history"][state["best_epoch"] - 1] if state["best_epoch"] else state["history"][-1]
+    )
     metrics = {
         "val_loss": state["best"],
         "baseline_val_loss": base,

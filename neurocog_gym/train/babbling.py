@@ -51,7 +51,9 @@ def record_babbling(
     data.qpos[robot.qpos_adr] = posture
     data.qpos[2] = STAND_HEIGHT
     pin = data.qpos[:7].copy()
-    mp = replace(MotorParams(), acc_max=(gait.acc_max,) * 12, k_rest=gait.k_rest, d_rest=gait.d_rest)
+    mp = replace(
+        MotorParams(), acc_max=(gait.acc_max,) * 12, k_rest=gait.k_rest, d_rest=gait.d_rest
+    )
     pools = MotorNeuronPools(posture, robot.joint_lo, robot.joint_hi, mp, dt=0.01)
     pools.reset(posture)
     mujoco.mj_forward(model, data)

@@ -64,9 +64,26 @@ def test_info_text_one_env(capsys):
 
 def test_record_video_walk_writes_the_frames(tmp_path, capsys):
     out = tmp_path / "walk.mp4"
-    rc = cli.main(["record-video", "--env", "NeuroCog/Walk-v0", "--policy", "blind",
-                   "--seconds", "0.2", "--width", "96", "--height", "64", "--fps", "50",
-                   "--out", str(out), "--quiet"])
+    rc = cli.main(
+        [
+            "record-video",
+            "--env",
+            "NeuroCog/Walk-v0",
+            "--policy",
+            "blind",
+            "--seconds",
+            "0.2",
+            "--width",
+            "96",
+            "--height",
+            "64",
+            "--fps",
+            "50",
+            "--out",
+            str(out),
+            "--quiet",
+        ]
+    )
     assert rc == 0
     assert str(out) in capsys.readouterr().out
     frames = _frames(out)
@@ -77,8 +94,16 @@ def test_record_video_walk_writes_the_frames(tmp_path, capsys):
 
 
 def test_record_video_draws_the_overlay(tmp_path):
-    common = dict(env_id="NeuroCog/SuddenObstacle-v0", policy="aef", seconds=0.05, seed=2,
-                  camera="overhead", width=128, height=96, fps=100)
+    common = dict(
+        env_id="NeuroCog/SuddenObstacle-v0",
+        policy="aef",
+        seconds=0.05,
+        seed=2,
+        camera="overhead",
+        width=128,
+        height=96,
+        fps=100,
+    )
     with_overlay = record_video(out=tmp_path / "a.mp4", **common)
     plain = record_video(out=tmp_path / "b.mp4", env_kwargs={"draw_overlay": False}, **common)
     assert with_overlay["frames"] == plain["frames"] == 6

@@ -8,8 +8,20 @@ from pathlib import Path
 import pytest
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "train_ppo.py"
-TINY = ["--n-envs", "2", "--n-steps", "64", "--batch-size", "64", "--n-epochs", "1",
-        "--checkpoint-every", "128", "--seed", "1"]
+TINY = [
+    "--n-envs",
+    "2",
+    "--n-steps",
+    "64",
+    "--batch-size",
+    "64",
+    "--n-epochs",
+    "1",
+    "--checkpoint-every",
+    "128",
+    "--seed",
+    "1",
+]
 
 
 def _run(*argv, timeout=600):
@@ -25,7 +37,9 @@ def test_train_resume_and_bench_the_model(tmp_path):
     assert s["total_steps"] == 256 and s["n_envs"] == 2 and s["vec"] == "subproc"
     assert (out / "model.zip").is_file()
     assert sorted(p.name for p in (out / "checkpoints").iterdir()) == [
-        "ppo_128_steps.zip", "ppo_256_steps.zip"]
+        "ppo_128_steps.zip",
+        "ppo_256_steps.zip",
+    ]
     assert any((out / "tb").rglob("events.out.tfevents.*"))
     assert json.loads((out / "args.json").read_text())["total_steps"] == 256
 
@@ -39,8 +53,21 @@ def test_train_resume_and_bench_the_model(tmp_path):
     assert s["total_steps"] == 384 and s["steps_this_session"] == 128
 
     bench = tmp_path / "bench"
-    r = _run("-m", "neurocog_gym.cli", "bench", "--policy", str(out / "model.zip"),
-             "--trials", "1", "--workers", "1", "--max-seconds", "1", "--out", str(bench))
+    r = _run(
+        "-m",
+        "neurocog_gym.cli",
+        "bench",
+        "--policy",
+        str(out / "model.zip"),
+        "--trials",
+        "1",
+        "--workers",
+        "1",
+        "--max-seconds",
+        "1",
+        "--out",
+        str(bench),
+    )
     assert r.returncode == 0, r.stderr
     summary = json.loads((bench / "summary.json").read_text())
     for scenario in ("sudden", "static"):

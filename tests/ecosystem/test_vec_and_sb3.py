@@ -59,9 +59,15 @@ def test_sb3_check_env(env_id):
         check_env(env, warn=True)
     env.close()
     messages = [str(w.message) for w in caught]
-    flagged = {m.split("Your observation ")[1].split(" ")[0] for m in messages
-               if m.startswith("Your observation ") and "unconventional shape" in m}
-    others = [m for m in messages if not (m.startswith("Your observation ")
-                                          and "unconventional shape" in m)]
+    flagged = {
+        m.split("Your observation ")[1].split(" ")[0]
+        for m in messages
+        if m.startswith("Your observation ") and "unconventional shape" in m
+    }
+    others = [
+        m
+        for m in messages
+        if not (m.startswith("Your observation ") and "unconventional shape" in m)
+    ]
     assert others == []
     assert flagged == SB3_ACCEPTED[env_id]

@@ -164,6 +164,8 @@ def test_default_gait_walks_10s_at_half_a_metre_per_second():
 
 
 def test_unknown_camera_name_is_a_clear_error():
-    with pytest.raises(ValueError, match="unknown camera_name 'nosuchcam': the scene's cameras are .*follow"):
+    with pytest.raises(
+        ValueError, match="unknown camera_name 'nosuchcam': the scene's cameras are .*follow"
+    ):
         gym.make("NeuroCog/Walk-v0", camera_name="nosuchcam")
     gym.make("NeuroCog/Walk-v0", camera_name=None).close()  # the free camera stays available

@@ -57,9 +57,7 @@ def test_intra_leg_gene_sets_one_entry_per_leg(k):
 def test_inter_leg_blocks_follow_the_ring():
     # C53 is "LEG 1 neuron 1 -> LEG-A neuron 1": transmitter ring position p, receiver p + 1.
     e53 = set(gene_entries(53))
-    assert e53 == {
-        ("W", neuron(RING0[(p + 1) % 4], 1), neuron(RING0[p], 1)) for p in range(4)
-    }
+    assert e53 == {("W", neuron(RING0[(p + 1) % 4], 1), neuron(RING0[p], 1)) for p in range(4)}
     # C41 -> LEG-B (p + 2, the diagonal in ring 0: FL<->HR, FR<->HL).
     e41 = set(gene_entries(41))
     assert ("W", neuron(3, 1), neuron(0, 1)) in e41  # FL -> HR
