@@ -15,6 +15,7 @@ class BuildPyWithAssets(build_py):
     """``build_py`` that also copies ``assets/`` into the built package."""
 
     def run(self):
+        """Build as usual, then copy the assets."""
         super().run()
         src = Path(__file__).resolve().parent / "assets"
         if src.is_dir():

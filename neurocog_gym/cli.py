@@ -53,10 +53,12 @@ def _cmd_demo(args) -> int:
     from neurocog_gym.demo import walk_demo
 
     summary = walk_demo(args.out, seconds=args.seconds, seed=args.seed, video=not args.no_video)
-    print(f"walked {summary['distance_m']:.2f} m in {summary['seconds']:.1f} s: "
-          f"{summary['speed_m_per_s']:.3f} m/s, cost of transport "
-          f"{summary['cost_of_transport']:.2f}" + (
-              f", FELL at {summary['fell_at_s']:.2f} s" if summary["fell_at_s"] else ""))  # fmt: skip
+    fell = f", FELL at {summary['fell_at_s']:.2f} s" if summary["fell_at_s"] else ""
+    print(
+        f"walked {summary['distance_m']:.2f} m in {summary['seconds']:.1f} s: "
+        f"{summary['speed_m_per_s']:.3f} m/s, cost of transport "
+        f"{summary['cost_of_transport']:.2f}{fell}"
+    )
     for key in ("video", "plot"):
         if key in summary:
             print(f"{key}: {summary[key]}")
@@ -66,8 +68,10 @@ def _cmd_demo(args) -> int:
         from neurocog_gym.demo import bench_demo
 
         policies = tuple(p.strip() for p in args.policies.split(",") if p.strip())
-        report, table = bench_demo(Path(args.out) / "bench", trials=args.trials,
-                                   policies=policies, seed=args.seed, workers=args.workers)  # fmt: skip
+        report, table = bench_demo(
+            Path(args.out) / "bench", trials=args.trials, policies=policies, seed=args.seed,
+            workers=args.workers,
+        )  # fmt: skip
         print(f"\nObstacle benchmark, {args.trials} trials per scenario and policy "
               f"(the README has the 50-trial tables):")  # fmt: skip
         print("\n".join(table))
@@ -197,7 +201,8 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = _Parser(
         prog="neurocog",
-        description="Neuro-cognitive quadruped locomotion with DD-GNG attention (Gymnasium/MuJoCo).",
+        description="Neuro-cognitive quadruped locomotion with DD-GNG attention "
+        "(Gymnasium/MuJoCo).",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -241,12 +246,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("train-aef", help="motor babbling + backpropagation of the AEF network",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
     p.add_argument("--samples", type=_nonneg_int, default=40000,
-                   help="babbling control cycles to record (reused from OUT if present)")  # fmt: skip
+                   help="babbling control cycles to record (reused from OUT if "
+                        "present)")  # fmt: skip
     p.add_argument("--epochs", type=_nonneg_int, default=60, help="most training epochs")
     p.add_argument("--seed", type=_nonneg_int, default=0, help="seed of babbling and training")
     p.add_argument("--out", default="runs/aef", help="output folder (resumes a killed run)")
     p.add_argument("--export", action="store_true",
-                   help="copy the trained weights over the shipped assets/aef_weights.npz")  # fmt: skip
+                   help="copy the trained weights over the shipped "
+                        "assets/aef_weights.npz")  # fmt: skip
     p.set_defaults(func=_cmd_train_aef)
 
     p = sub.add_parser("bench", help="sudden- and static-obstacle trials beside Table 4 (§6.5)",
@@ -258,8 +265,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_nonneg_int, default=0,
                    help="run seed (trial seeds derive from seed, scenario, i)")  # fmt: skip
     p.add_argument("--policy", default="aef",
-                   help="aef, aef-provision (interrupts off), blind, AEF weights (.npz) or a stable-baselines3 model "
-                   "(.zip)")  # fmt: skip
+                   help="aef, aef-provision (interrupts off), blind, AEF weights (.npz) "
+                        "or a stable-baselines3 model (.zip)")  # fmt: skip
     p.add_argument("--attention", choices=("on", "off"), default="on",
                    help="off: plain GNG instead of DD-GNG attention (the ablation)")  # fmt: skip
     p.add_argument("--max-seconds", type=_positive_float, default=None,
@@ -284,8 +291,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--env", default="NeuroCog/SuddenObstacle-v0",
                    help="registered env id (see neurocog info)")  # fmt: skip
     p.add_argument("--policy", default="aef",
-                   help="aef, aef-provision (interrupts off), blind, AEF weights (.npz) or a stable-baselines3 model (.zip); "
-                   "Walk-v0 takes blind or a model trained on it")  # fmt: skip
+                   help="aef, aef-provision (interrupts off), blind, AEF weights (.npz) "
+                        "or a stable-baselines3 model (.zip); Walk-v0 takes blind or a model "
+                        "trained on it")  # fmt: skip
     p.add_argument("--seconds", type=_positive_float, default=7.0,
                    help="simulated seconds (the episode may end sooner: fell or passed)",
                    )  # fmt: skip

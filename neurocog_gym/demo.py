@@ -14,8 +14,9 @@ from neurocog_gym.robot.names import LEGS
 def walk_demo(
     out: str | Path, seconds: float = 20.0, seed: int = 0, video: bool = True, fps: int = 30
 ) -> dict:
-    """Walk the robot for ``seconds`` on the shipped gait; write ``walk.mp4``, ``gait.png``
-    and ``walk_summary.json`` into ``out``. Returns the summary.
+    """Walk the robot for ``seconds`` on the shipped gait.
+
+    Writes ``walk.mp4``, ``gait.png`` and ``walk_summary.json`` into ``out``; returns the summary.
     """
     import gymnasium as gym
     from tqdm import tqdm

@@ -11,8 +11,10 @@ from pathlib import Path
 
 
 def _file_mode(path: Path) -> int:
-    """Permission bits the written file should get: those of the file it replaces, else what
-    ``open()`` would give a new file (0o666 less the umask). ``mkstemp`` alone makes it 0o600.
+    """Permission bits for the written file.
+
+    Those of the file it replaces, else what ``open()`` would give a new file (0o666 less the
+    umask); ``mkstemp`` alone makes it 0o600.
     """
     try:
         return path.stat().st_mode & 0o7777

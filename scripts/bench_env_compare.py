@@ -123,12 +123,13 @@ def main(argv: list[str] | None = None) -> None:
             ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", tree, base], check=True
         )
         try:
+            sudden = "NeuroCog/SuddenObstacle-v0"
+            mark = " (uncommitted changes)" if dirty else ""
             rows = {
-                f"`NeuroCog/SuddenObstacle-v0`, baseline {base}": ("NeuroCog/SuddenObstacle-v0", tree),
-                f"`NeuroCog/SuddenObstacle-v0`, this tree {head}{' (uncommitted changes)' if dirty else ''}": (
-                    "NeuroCog/SuddenObstacle-v0", str(ROOT)),
+                f"`{sudden}`, baseline {base}": (sudden, tree),
+                f"`{sudden}`, this tree {head}{mark}": (sudden, str(ROOT)),
                 "`Ant-v5`, random actions": ("Ant-v5", None),
-            }  # fmt: skip
+            }
             load0, up0 = load_average(), _uptime()
             rates: dict[str, list[float]] = {k: [] for k in rows}
             for r in range(args.rounds):

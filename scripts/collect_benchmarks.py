@@ -36,7 +36,8 @@ def main() -> None:
         "",
         "Every number here was measured by the script named in its section, on the machine named",
         "there; ratios are against a reference measured in the same run, times are medians.",
-        "Regenerate a section by rerunning its script, then `python scripts/collect_benchmarks.py`.",
+        "Regenerate a section by rerunning its script, then "
+        "`python scripts/collect_benchmarks.py`.",
         "",
     ]
     lines += [f"- [{p.stem[11:]}](#{p.stem})" for p in parts]

@@ -108,8 +108,9 @@ def main() -> None:
         tally[r["outcome"]] += 1
         fmt = lambda x: "-" if x is None else f"{x:.2f}"  # noqa: E731
         print(
-            f"{i:3d} {r['outcome']:8s} app={fmt(r['appeared'])} leg={r['leg']} seen={fmt(r['seen'])} "
-            f"int={fmt(r['interrupt'])} prov={fmt(r['provision'])} end={r['t_end']:.2f} fell={r['fell']} "
+            f"{i:3d} {r['outcome']:8s} app={fmt(r['appeared'])} leg={r['leg']} "
+            f"seen={fmt(r['seen'])} int={fmt(r['interrupt'])} prov={fmt(r['provision'])} "
+            f"end={r['t_end']:.2f} fell={r['fell']} "
             f"h={r['heights_cm']} l={r['lengths_cm']} peak={r['foot_peak_cm']} "
             f"contacts={ {k: round(v, 2) for k, v in r['contacts'].items()} }",
             flush=True,

@@ -127,8 +127,9 @@ class ObstacleEnv(QuadrupedEnv):
         self.perception_time += self.pipeline.timings["total"]
 
     def perceived_boxes(self) -> np.ndarray:
-        """(K, 2, 3) the objects' boxes in the attention memory, without the attention padding
-        (the DD-GNG samples a padded box; the effectivity checks the object itself).
+        """(K, 2, 3) the objects' boxes in the attention memory, without the attention padding.
+
+        The DD-GNG samples a padded box; the effectivity checks the object itself.
         """
         boxes = self.pipeline.attention_boxes.copy()
         if len(boxes):
@@ -283,9 +284,11 @@ class ObstacleEnv(QuadrupedEnv):
     # -- rendering ------------------------------------------------------------------------------
 
     def render(self):
-        """``rgb_array``/``human``: the scene with the DD-GNG graph, its labels, the attention
-        boxes and the predicted footholds drawn in (``draw_overlay``); ``depth_array``: the four
-        ToF depth images side by side, (H, 4 W) float32 metres, 0 where invalid.
+        """Render the scene, or the ToF depth images.
+
+        ``rgb_array``/``human``: the scene with the DD-GNG graph, its labels, the attention boxes
+        and the predicted footholds drawn in (``draw_overlay``); ``depth_array``: the four ToF
+        depth images side by side, (H, 4 W) float32 metres, 0 where invalid.
         """
         if self.render_mode == "depth_array":
             if self.frame is None:
@@ -327,8 +330,10 @@ def _segment_marker(a: np.ndarray, b: np.ndarray, radius: float, rgba: np.ndarra
 
 
 def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
-    """Visual markers of the perception state: graph nodes and edges coloured by the kind of
-    surface their facets belong to, attention boxes, and footholds (green safe, red unsafe).
+    """Visual markers of the perception state.
+
+    Graph nodes and edges coloured by the kind of surface their facets belong to, attention
+    boxes, and footholds (green safe, red unsafe).
     """
     import mujoco
 
@@ -357,7 +362,8 @@ def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
         markers.append(_segment_marker(nodes[a], nodes[b], 0.0025, rgba))
     for box in env.pipeline.attention_boxes:
         markers.append({"type": mujoco.mjtGeom.mjGEOM_BOX, "size": (box[1] - box[0]) / 2,
-                        "pos": (box[1] + box[0]) / 2, "rgba": np.array([1.0, 0.3, 0.2, 0.18])})  # fmt: skip
+                        "pos": (box[1] + box[0]) / 2,
+                        "rgba": np.array([1.0, 0.3, 0.2, 0.18])})  # fmt: skip
     if env.eff is not None:
         for leg in range(4):
             safe = env.eff.foothold_safe[leg] and env.eff.path_safe[leg]
@@ -365,5 +371,6 @@ def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
             pos = env.eff.foothold[leg].copy()
             pos[2] = max(pos[2], 0.0) + 0.005
             markers.append({"type": mujoco.mjtGeom.mjGEOM_CYLINDER,
-                            "size": np.array([0.025, 0.025, 0.004]), "pos": pos, "rgba": rgba})  # fmt: skip
+                            "size": np.array([0.025, 0.025, 0.004]), "pos": pos,
+                            "rgba": rgba})  # fmt: skip
     return markers

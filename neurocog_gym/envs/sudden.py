@@ -56,7 +56,7 @@ class SuddenObstacleEnv(ObstacleEnv):
     ``min_gap`` (m, 0.01: closest a new block may come to the robot), ``placement_tries`` (5),
     ``tof`` (``ToFParams``), ``perception`` (``PipelineParams``: ``gng="gng"`` switches the
     attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``.
-    """
+    """  # noqa: E501
 
     def __init__(
         self,

@@ -65,4 +65,4 @@ class WalkEnv(QuadrupedEnv):
     | render_mode | None | None, "rgb_array", "depth_array", "human" |
     | width, height | 640, 480 | render size, pixels |
     | camera_name | "follow" | scene camera used to render |
-    """
+    """  # noqa: E501

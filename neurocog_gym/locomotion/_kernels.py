@@ -1,6 +1,8 @@
-"""numba kernels of the locomotion generator: Matsuoka CPG (Eq. 5-7) and motor-neuron pools
-(Eq. 8-11). Pure functions over NumPy arrays; the classes in ``cpg.py`` and ``motor.py`` own the
-state and call these once per 0.01 s control cycle.
+"""numba kernels of the locomotion generator.
+
+Matsuoka CPG (Eq. 5-7), motor-neuron pools (Eq. 8-11) and the joint drives: pure functions over
+NumPy arrays; the classes in ``cpg.py``, ``motor.py`` and ``generator.py`` own the state and call
+these once per 0.01 s control cycle.
 """
 
 from __future__ import annotations
@@ -40,8 +42,8 @@ def matsuoka_step(x, v, W, V, s, u0, b, tau, T, tau_f, dt_units, n_sub):
     sens = np.zeros(n)
     for i in range(n):
         acc = 0.0
-        for l in range(nl):
-            acc += V[i, l] * s[l]
+        for k in range(nl):
+            acc += V[i, k] * s[k]
         sens[i] = acc
     for _ in range(n_sub):
         for i in range(n):
@@ -108,17 +110,23 @@ def motor_neuron_step(
         qd_ref: (12,) servo target rates, rad/s; updated in place.
         drive: (12,) CPG drive y of each joint, dimensionless.
         theta_int: (12,) interrupt Theta in [-1, 1] (the AEF's joint group).
-        theta, theta_dot: (12,) measured joint angles (rad) and rates (rad/s).
+        theta: (12,) measured joint angles, rad.
+        theta_dot: (12,) measured joint rates, rad/s.
         touch: (4,) touch inputs s_l.
         posture: (12,) rest angles, also theta_opt of Eq. (9), rad.
-        mu1, mu2: Eq. (8) input gains.
-        acc_max, vel_max: (12,) theta_dd_MAX (rad/s^2) and theta_dot_MAX (rad/s).
+        mu1: Eq. (8) gain of the CPG input.
+        mu2: Eq. (8) gain of the interrupt.
+        acc_max: (12,) theta_dd_MAX, rad/s^2.
+        vel_max: (12,) theta_dot_MAX, rad/s.
         fl_width: (12,) Eq. (9) theta_R * omega, rad.
         fl_c: Eq. (9) c = ln 0.05.
-        fv_K, fv_N: Eq. (10) curvature K and eccentric force ratio N.
+        fv_K: Eq. (10) curvature K.
+        fv_N: Eq. (10) eccentric force ratio N.
         Z: (12, 4) Eq. (11) touch weights z_il, rad/s^2.
-        k_rest, d_rest: restoring stiffness (1/s^2) and damping (1/s).
-        q_lo, q_hi: (12,) joint range, rad.
+        k_rest: restoring stiffness, 1/s^2.
+        d_rest: restoring damping, 1/s.
+        q_lo: (12,) lower joint limits, rad.
+        q_hi: (12,) upper joint limits, rad.
         dt: control cycle, s.
         acc_out: (12,) output, the Eq. (8) acceleration (without the restoring term).
     """
@@ -135,8 +143,8 @@ def motor_neuron_step(
         fl = force_length(theta[i], posture[i], fl_width[i], fl_c)
         fv = force_velocity(v_muscle, vel_max[i], fv_K, fv_N)
         s = 0.0
-        for l in range(touch.shape[0]):
-            s += Z[i, l] * touch[l]
+        for k in range(touch.shape[0]):
+            s += Z[i, k] * touch[k]
         acc = a * acc_max[i] * fl * fv + s
         acc_out[i] = acc
         acc -= k_rest * (q_ref[i] - posture[i]) + d_rest * qd_ref[i]

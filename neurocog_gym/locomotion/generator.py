@@ -138,9 +138,10 @@ class LocomotionGenerator:
         self.pools.reset(self.posture)
 
     def _drive(self, y: np.ndarray) -> None:
-        """Joint drives into ``self.drive`` and hip drives into ``self.hip_drive`` (one numba
-        call, ``_kernels.drive_kernel``). Hip drive is negative while the leg protracts (swing);
-        the foot then moves to +y under a positive s_COR.
+        """Joint drives into ``self.drive``, hip drives into ``self.hip_drive``.
+
+        One numba call (``_kernels.drive_kernel``). Hip drive is negative while the leg
+        protracts (swing); the foot then moves to +y under a positive s_COR.
         """
         p = self.prov
         drive_kernel(

@@ -94,7 +94,8 @@ class MotorNeuronPools:
         Args:
             drive: (12,) CPG drive of each joint, dimensionless.
             interrupt: (12,) Theta in [-1, 1].
-            theta, theta_dot: (12,) measured joint angles (rad) and rates (rad/s).
+            theta: (12,) measured joint angles, rad.
+            theta_dot: (12,) measured joint rates, rad/s.
             touch: (4,) touch inputs.
         """
         p = self.params

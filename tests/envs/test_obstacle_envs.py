@@ -25,7 +25,7 @@ def test_sudden_obstacle_appears_in_the_swing_path_of_a_front_leg():
     for seed in range(3):
         env.reset(seed=seed)
         u = env.unwrapped
-        _walk_until(env, lambda i: u.appeared_at is not None)
+        _walk_until(env, lambda i, u=u: u.appeared_at is not None)
         assert u.appeared_at is not None and 1.0 <= u.appeared_at <= 2.5
         leg = u.appear_leg
         assert leg in (0, 1)

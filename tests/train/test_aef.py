@@ -78,6 +78,7 @@ def test_cli_train_aef_bad_arguments(tmp_path):
     r = subprocess.run([sys.executable, "-m", "neurocog_gym.cli", "train-aef", "--samples", "-5"],
                        capture_output=True, text=True)  # fmt: skip
     assert r.returncode != 0 and "Traceback" not in r.stderr
-    r = subprocess.run([sys.executable, "-m", "neurocog_gym.cli", "train-aef", "--samples", "10",
-                        "--out", str(tmp_path / "bad")], capture_output=True, text=True)  # fmt: skip
+    cmd = [sys.executable, "-m", "neurocog_gym.cli", "train-aef", "--samples", "10", "--out",
+           str(tmp_path / "bad")]  # fmt: skip
+    r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 2 and "at least 100" in r.stderr and "Traceback" not in r.stderr
