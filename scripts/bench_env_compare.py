@@ -95,6 +95,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds (median over them)")
     ap.add_argument("--seconds", type=float, default=8.0, help="timed seconds per row per round")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "benchmarks_env_compare.md")
+    ap.add_argument("--note", default="", help="a paragraph appended to the section")
     args = ap.parse_args(argv)
     if args.rounds < 1 or not args.seconds > 0:
         ap.error("--rounds must be >= 1 and --seconds > 0")
@@ -175,6 +176,8 @@ def main(argv: list[str] | None = None) -> None:
         ),
         "",
     ]
+    if args.note:
+        lines += [args.note, ""]
     text = "\n".join(lines)
     print(text)
     sys.path.insert(0, str(ROOT))
