@@ -25,22 +25,7 @@ PHASE_OVER = 2
 
 
 class EffectivityOracle:
-    """Foothold and swing-path prediction and the AEF's interrupt directions (§4.2.3, §5.2).
-
-    An interrupt, once fired for a leg, follows that leg's foot through the rest of its swing
-    (closed loop, every cycle, against the box it was fired for):
-
-    * **up** while the sole is below the block's top plus ``lift_clearance``: the foot rises at
-      ``lift_speed`` and holds its ground position, backing off when it is closer than
-      ``approach_gap`` to the near face;
-    * **over** once it is high enough: it moves forward at ``carry_speed`` and keeps its height,
-      until it is past the far face; then the CPG's own stance phase sets it down beyond.
-
-    The interrupt ends when the foot is past the block, touches down, or after
-    ``max_interrupt_time``. The direction handed to the AEF is the wanted foot velocity relative
-    to the torso in its yaw frame, the quantity the AEF's inverse model learned in motor
-    babbling (``train/babbling.py``).
-    """
+    """The effectivity in plain NumPy, as ``Effectivity`` computed it before its kernel."""
 
     def __init__(self, params: EffectivityParams | None = None):
         self.p = params or EffectivityParams()
@@ -63,14 +48,7 @@ class EffectivityOracle:
     def remember(
         self, boxes: np.ndarray, foot: np.ndarray, torso: np.ndarray, heading: np.ndarray
     ) -> np.ndarray:
-        """Merge the perceived boxes into the obstacle memory and return it.
-
-        The sensors look ahead; an obstacle under the body (the hind legs' business) or right at
-        the front feet is out of their view. The effectivity therefore keeps every perceived box
-        until the robot has walked past it: a new box replaces the remembered ones it overlaps,
-        and a box is forgotten once every foot is ``forget_behind`` past its far face or it is
-        ``forget_distance`` away.
-        """
+        """As ``Effectivity.remember``."""
         p = self.p
         mem = [m for m in self.memory if not any(_overlap(m, b) for b in boxes)]
         mem += list(np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3))
@@ -88,28 +66,8 @@ class EffectivityOracle:
         self.memory = np.array(keep).reshape(-1, 2, 3)
         return self.memory
 
-    def step(
-        self,
-        t: float,
-        touch: np.ndarray,
-        foot: np.ndarray,
-        hip: np.ndarray,
-        yaw: float,
-        v_body: np.ndarray,
-        boxes: np.ndarray,
-    ) -> EffectivityState:
-        """Predict footholds and swing paths and check them against ``boxes``.
-
-        Args:
-            t: time, s.
-            touch: (4,) normalised touch inputs.
-            foot: (4, 3) foot positions, m.
-            hip: (4, 3) hip positions, m.
-            yaw: torso heading, rad.
-            v_body: (3,) torso linear velocity, m/s (world).
-            boxes: (K, 2, 3) perceived obstacle boxes (min/max corners), m; merged into the
-                obstacle memory (:meth:`remember`), against which everything is checked.
-        """
+    def step(self, t, touch, foot, hip, yaw, v_body, boxes) -> EffectivityState:
+        """As ``Effectivity.step``."""
         p = self.p
         heading = np.array([np.cos(yaw), np.sin(yaw), 0.0])
         boxes = self.remember(np.asarray(boxes).reshape(-1, 2, 3), foot, hip.mean(axis=0), heading)
