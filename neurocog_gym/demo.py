@@ -25,11 +25,11 @@ def walk_demo(
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    n = int(round(seconds / 0.01))  # Walk-v0's control cycle
     env = gym.make("NeuroCog/Walk-v0", render_mode="rgb_array" if video else None,
-                   max_episode_steps=None, width=640, height=480)  # fmt: skip
+                   max_episode_steps=n, width=640, height=480)  # fmt: skip
     obs, _ = env.reset(seed=seed)
     base = env.unwrapped
-    n = int(round(seconds / base.dt))
     every = max(1, int(round(1.0 / (fps * base.dt))))
     frames = []
     log = {"t": [], "x": [], "foot_z": [], "touch": [], "hip": [], "cpg": []}
@@ -48,8 +48,9 @@ def walk_demo(
         log["cpg"].append(obs["cpg"].copy())
         if video and k % every == 0:
             frames.append(env.render())
-        if terminated or truncated:
+        if terminated:  # a fall (the time limit truncates at the end of the walk)
             fell_at = k * base.dt
+        if terminated or truncated:
             break
     env.close()
     t = np.asarray(log["t"])

@@ -15,3 +15,13 @@ def test_demo_walks_then_runs_a_short_benchmark(tmp_path, capsys):
     assert "| static | blind, attention on | 1 |" in text
     assert (out / "bench" / "report.md").is_file()
     assert (out / "bench" / "blind" / "trials.jsonl").read_text().count("\n") == 2
+
+
+def test_the_walk_is_not_reported_as_a_fall_when_its_time_is_up(tmp_path):
+    """20 s is Walk-v0's registered time limit: the truncation at the end is not a fall."""
+    from neurocog_gym.demo import walk_demo
+
+    summary = walk_demo(tmp_path, seconds=20.0, video=False)
+    assert summary["fell_at_s"] is None
+    assert abs(summary["seconds"] - 20.0) < 1e-9
+    assert 0.4 < summary["speed_m_per_s"] < 0.6
