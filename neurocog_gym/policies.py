@@ -6,6 +6,9 @@
   named; when an object lies ahead but not in a swing (``aef_mode == 2``) the provision group
   changes the walk; otherwise the CPG walks alone (zero action).
 * :class:`BlindPolicy` — never interrupts (the paper's "improved process disabled", Fig. 16b).
+* :class:`neurocog_gym.avoid.AvoidPolicy` — backs off from a block that appears in front of the
+  robot, side-steps out of its path and walks past; reads the env's effectivity, so it has a
+  ``reset(env)`` to call after every ``env.reset`` (:func:`start_episode` does it for any policy).
 * :class:`SB3Policy` — a saved stable-baselines3 model.
 """
 
@@ -95,7 +98,7 @@ def _load_sb3(path: Path):
     raise ValueError(f"{path} is not a stable-baselines3 model ({errors[0]})")
 
 
-POLICY_NAMES = ("aef", "aef-provision", "blind")
+POLICY_NAMES = ("aef", "aef-provision", "blind", "avoid")
 """Named policies; anything else is a file (AEF weights or a stable-baselines3 model)."""
 
 
@@ -106,6 +109,9 @@ def make_policy(spec: str):
     * ``"aef-provision"``: :class:`AEFPolicy` with the interrupt group off (``interrupt_gain=0``),
       only the walking provision acts;
     * ``"blind"``: :class:`BlindPolicy`;
+    * ``"avoid"``: :class:`neurocog_gym.avoid.AvoidPolicy` (the back-off / side-step reflex for
+      sudden blocks on top of ``aef-provision``; bind it with ``policy.reset(env)`` after each
+      ``env.reset``);
     * a path ending in ``.npz``: :class:`AEFPolicy` with those weights;
     * any other path: a saved stable-baselines3 model (:class:`SB3Policy`).
     """
@@ -117,6 +123,17 @@ def make_policy(spec: str):
         return policy
     if spec == "blind":
         return BlindPolicy()
+    if spec == "avoid":
+        from neurocog_gym.avoid import AvoidPolicy
+
+        return AvoidPolicy()
     if spec.endswith(".npz"):
         return AEFPolicy(weights=spec)
     return SB3Policy(spec)
+
+
+def start_episode(policy, env) -> None:
+    """Tell ``policy`` a new episode of ``env`` began (after ``env.reset``), if it cares."""
+    reset = getattr(policy, "reset", None)
+    if callable(reset):
+        reset(env)

@@ -81,7 +81,7 @@ def record_video(
     import imageio.v2 as imageio
 
     from neurocog_gym.envs.base import make_env
-    from neurocog_gym.policies import make_policy
+    from neurocog_gym.policies import make_policy, start_episode
 
     if not seconds > 0:
         raise ValueError(f"seconds must be positive, got {seconds}")
@@ -107,6 +107,7 @@ def record_video(
         stride = max(1, int(round(1.0 / (dt * fps))))
         out.parent.mkdir(parents=True, exist_ok=True)
         obs, info = env.reset(seed=seed)
+        start_episode(pol, env)
         x0 = float(u.data.qpos[0])
         frames, n, terminated, truncated = 0, 0, False, False
         from tqdm import tqdm

@@ -76,11 +76,15 @@ def load_run(path: str | os.PathLike) -> Run:
 def run_label(config: dict) -> str:
     """Short name of a run: policy (model file stem) and attention setting."""
     policy = str(config.get("policy") or "?")
-    if policy not in ("aef", "aef-provision", "blind"):
+    names = {
+        "aef": "AEF",
+        "aef-provision": "AEF provision only",
+        "blind": "blind",
+        "avoid": "avoid reflex + AEF provision",
+    }
+    if policy not in names:
         policy = Path(policy).stem
-    name = {"aef": "AEF", "aef-provision": "AEF provision only", "blind": "blind"}.get(
-        policy, policy
-    )
+    name = names.get(policy, policy)
     return f"{name}, attention {config.get('attention') or 'on'}"
 
 

@@ -86,7 +86,8 @@ class BenchConfig:
     seed: int = 0
     """Run seed S; trial seeds derive from (S, scenario, index)."""
     policy: str = "aef"
-    """"aef", "aef-provision", "blind", AEF weights (.npz) or a saved stable-baselines3 model."""
+    """"aef", "aef-provision", "blind", "avoid", AEF weights (.npz) or a saved stable-baselines3
+    model."""
     attention: str = "on"
     """"on": DD-GNG attention; "off": plain GNG (the ablation)."""
     max_seconds: float | None = None
@@ -311,10 +312,13 @@ def run_trial(
         ``gng_mean``, ``affordance_mean`` per control cycle), ``wall_s`` and ``similarity``
         (:meth:`SimilarityProbe.result`). The caller adds the run's policy and attention.
     """
+    from neurocog_gym.policies import start_episode
+
     settings = similarity or SimilaritySettings()
     u = env.unwrapped
     wall0 = time.perf_counter()
     obs, info = env.reset(seed=spec.seed)
+    start_episode(policy, env)
     x0 = float(u.data.qpos[0])
     probe = None
     perception, gng_ms, aff_ms = [], [], []

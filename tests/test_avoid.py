@@ -1,0 +1,48 @@
+"""The avoid reflex (neurocog_gym/avoid.py): clean passes where the blind CPG stumbles, the AEF's
+provision elsewhere, and a clear error when it is not bound to an obstacle env."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import neurocog_gym  # noqa: F401
+from neurocog_gym.bench.runner import TrialSpec, make_env, run_trial, trial_seed
+from neurocog_gym.policies import make_policy
+
+
+def _trial(scenario: str, index: int, policy: str) -> dict:
+    env = make_env(scenario, "on", None)
+    spec = TrialSpec(scenario=scenario, index=index, seed=trial_seed(0, scenario, index))
+    try:
+        return run_trial(env, make_policy(policy), spec)
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("index", [2, 3])
+def test_sudden_block_passed_without_contact_where_the_blind_cpg_hits_it(index):
+    blind = _trial("sudden", index, "blind")
+    avoid = _trial("sudden", index, "avoid")
+    assert blind["touched"] or blind["outcome"] == "fail"
+    assert avoid["outcome"] == "success" and avoid["contacts"]["steps"] == 0
+
+
+def test_far_blocks_are_left_to_the_aef_provision():
+    """Static blocks are seen from afar: the reflex never engages and the episode is the
+    aef-provision one, step for step."""
+    a = _trial("static", 0, "avoid")
+    b = _trial("static", 0, "aef-provision")
+    assert (a["outcome"], a["steps"], a["distance"]) == (b["outcome"], b["steps"], b["distance"])
+
+
+def test_the_policy_must_be_bound_to_an_obstacle_env():
+    policy = make_policy("avoid")
+    env = gym.make("NeuroCog/SuddenObstacle-v0")
+    obs, _ = env.reset(seed=0)
+    with pytest.raises(RuntimeError, match=r"call policy.reset\(env\)"):
+        policy(obs)
+    policy.reset(env)
+    action = policy(obs)
+    assert action.shape == (15,) and action.dtype == np.float32
+    with pytest.raises(ValueError, match="needs an obstacle env"):
+        policy.reset(gym.make("NeuroCog/Walk-v0"))
