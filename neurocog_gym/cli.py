@@ -216,7 +216,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-video", action="store_true", help="skip the video (faster)")
     p.add_argument("--trials", type=_nonneg_int, default=4,
                    help="obstacle trials per scenario and policy (0: walk only)")  # fmt: skip
-    p.add_argument("--policies", default="aef,aef-provision,blind",
+    p.add_argument("--policies", default="avoid,aef,aef-provision,blind",
                    help="comma-separated policies of the short benchmark")  # fmt: skip
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="parallel trials (None: all local cores)")  # fmt: skip
