@@ -85,7 +85,9 @@ def run_label(config: dict) -> str:
     if policy not in names:
         policy = Path(policy).stem
     name = names.get(policy, policy)
-    return f"{name}, attention {config.get('attention') or 'on'}"
+    label = f"{name}, attention {config.get('attention') or 'on'}"
+    seed = config.get("seed")
+    return label if seed in (None, 0) else f"{label}, seed {seed}"
 
 
 def _slug(text: str) -> str:
