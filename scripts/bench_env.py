@@ -421,7 +421,8 @@ def part_ppo(args: Args) -> list[str]:
             f"batch {a['batch_size']}, lr {a['learning_rate']}, log_std_init {a['log_std_init']}). "
             f"Outcomes of its training episodes (stochastic actions): "
             f"{t['outcomes_this_session']}. Evaluated with deterministic actions by "
-            "`neurocog bench --policy MODEL` (trials per row below), beside the avoid reflex and the blind CPG:",
+            "`neurocog bench --policy MODEL` (trials per row below), beside the avoid reflex "
+            "and the blind CPG:",
             "",
         ]
     return lines + _bench_rows(args.bench_runs)
