@@ -151,15 +151,18 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         """(4,) sole contact force over a quarter of the body weight (1 = a quarter's load)."""
         return self.data.sensordata[self.robot.touch_adr] / self._weight_per_leg
 
-    def _proprioception(self) -> dict[str, np.ndarray]:
+    def _proprioception(self, touch: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """The proprioceptive observation; ``touch``: this cycle's :meth:`touch`, if read."""
         d = self.data
+        if touch is None:
+            touch = self.touch()
         torso = self.robot.torso_body
         rot = d.xmat[torso].reshape(3, 3)
         lin_vel = rot.T @ d.qvel[0:3]
         return {
             "joint_pos": self.joint_pos().astype(np.float32),
             "joint_vel": self.joint_vel().astype(np.float32),
-            "touch": self.touch().astype(np.float32),
+            "touch": touch.astype(np.float32),
             "torso_quat": d.qpos[3:7].astype(np.float32),
             "torso_lin_vel": lin_vel.astype(np.float32),
             "torso_ang_vel": d.qvel[3:6].astype(np.float32),

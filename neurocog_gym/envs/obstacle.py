@@ -75,6 +75,9 @@ class ObstacleEnv(QuadrupedEnv):
         self.warmup_cycles = int(warmup_cycles)
         self.observation_space = spaces.Dict(self._observation_spaces())
         self.frame = None
+        self._frame_origin = None
+        self._boxes_source = self._boxes_cache = None
+        self._yaw_now = self._touch_now = None
         self.eff: EffectivityState | None = None
         self.touched = False
         self.touch_events = 0
@@ -113,25 +116,32 @@ class ObstacleEnv(QuadrupedEnv):
     def _feet(self) -> np.ndarray:
         return self.data.site_xpos[self.robot.foot_site]
 
-    def _sense_and_perceive(self, force_frame: bool = False) -> None:
+    def _sense_and_perceive(self, force_frame: bool = False, yaw: float | None = None) -> None:
         frame = self.tof.sense(self.data) if force_frame else self.tof.maybe_sense(self.data)
         if frame is not None:
             self.frame = frame
+            # The facets face the sensors' mean position: one mean per frame, not per cycle.
+            self._frame_origin = frame.origins.mean(axis=0)
         if self.frame is None:
             return
-        yaw = self._yaw()
+        if yaw is None:
+            yaw = self._yaw()
         forward = (np.cos(yaw), np.sin(yaw), 0.0)
-        self.pipeline.step(
-            self.frame.points, self.frame.origins.mean(axis=0), self.data.time, forward
-        )
+        self.pipeline.step(self.frame.points, self._frame_origin, self.data.time, forward)
         self.perception_time += self.pipeline.timings["total"]
 
     def perceived_boxes(self) -> np.ndarray:
         """(K, 2, 3) the objects' boxes in the attention memory, without the attention padding.
 
-        The DD-GNG samples a padded box; the effectivity checks the object itself.
+        The DD-GNG samples a padded box; the effectivity checks the object itself. The array is
+        shared until the memory changes: copy it before modifying it.
         """
-        boxes = self.pipeline.attention_boxes.copy()
+        source = self.pipeline.attention_boxes
+        if source is self._boxes_source:
+            # The pipeline replaces (never edits) its memory array: unchanged since last cycle.
+            return self._boxes_cache
+        boxes = source.copy()
+        self._boxes_source, self._boxes_cache = source, boxes
         if len(boxes):
             pad = self.pipeline.affordance_params.suspect_padding
             boxes[:, 0] += pad
@@ -139,11 +149,15 @@ class ObstacleEnv(QuadrupedEnv):
             boxes[:, 0, 2] = np.maximum(boxes[:, 0, 2], 0.0)
         return boxes
 
-    def _update_effectivity(self) -> None:
+    def _update_effectivity(self, yaw: float | None = None) -> None:
         d = self.data
+        # Read once per cycle and kept for the observation (nothing moves the robot in between).
+        self._yaw_now = self._yaw() if yaw is None else yaw
+        self._touch_now = self.touch()
+        # Fancy indexing already copies feet and hips; the kernel only reads v_body.
         self.eff = self.effectivity.step(
-            d.time, self.touch(), self._feet().copy(), d.xpos[self.robot.hip_body].copy(),
-            self._yaw(), d.qvel[0:3].copy(), self.perceived_boxes(),
+            d.time, self._touch_now, self._feet(), d.xpos[self.robot.hip_body],
+            self._yaw_now, d.qvel[0:3], self.perceived_boxes(),
         )  # fmt: skip
 
     # -- episode --------------------------------------------------------------------------------
@@ -167,7 +181,7 @@ class ObstacleEnv(QuadrupedEnv):
         # The robot has looked at the scene before the trial starts: warm the map up.
         self._sense_and_perceive(force_frame=True)
         for _ in range(self.warmup_cycles):
-            self.pipeline.step(self.frame.points, self.frame.origins.mean(axis=0), 0.0)
+            self.pipeline.step(self.frame.points, self._frame_origin, 0.0)
         self.tof.reset(seed=int(self.np_random.integers(2**31)))
         self._update_effectivity()
 
@@ -176,8 +190,9 @@ class ObstacleEnv(QuadrupedEnv):
 
     def _after_physics(self) -> None:
         self._task_event()
-        self._sense_and_perceive()
-        self._update_effectivity()
+        yaw = self._yaw()
+        self._sense_and_perceive(yaw=yaw)
+        self._update_effectivity(yaw)
         touching = bool(self.pool.touching(self.data, self.robot.robot_geoms).any())
         if touching and not self._was_touching:
             self.touch_events += 1
@@ -248,8 +263,8 @@ class ObstacleEnv(QuadrupedEnv):
         return out, mask, best
 
     def _get_obs(self) -> dict[str, np.ndarray]:
-        obs = self._proprioception()
-        yaw = self._yaw()
+        obs = self._proprioception(self._touch_now)
+        yaw = self._yaw() if self._yaw_now is None else self._yaw_now
         c, s = np.cos(yaw), np.sin(yaw)
         rot = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
         objects, mask, (a_h, a_w, a_s) = self._objects(rot)
