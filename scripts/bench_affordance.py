@@ -20,14 +20,15 @@ from __future__ import annotations
 import argparse
 import datetime
 import os
-import platform
 import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numba
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import machine  # noqa: E402
 
 from neurocog_gym.perception import _affordance_kernels as _k
 from neurocog_gym.perception.affordance import (
@@ -100,21 +101,6 @@ def scene_with_nodes(target: int, seed: int) -> SyntheticScene:
     return best
 
 
-def machine() -> str:
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (
-        f"{cpu}, {os.cpu_count()} logical cores, {platform.system()} {platform.release()}; "
-        f"Python {platform.python_version()}, NumPy {np.__version__}, numba {numba.__version__}"
-    )
-
-
 def main(argv: list[str] | None = None) -> None:
     args = parse(argv)
     prm = DEFAULT_PARAMS.packed
@@ -175,7 +161,7 @@ def main(argv: list[str] | None = None) -> None:
             "## Affordance detection speed (§7.2)",
             "",
             f"Command: `{cmd}`  ",
-            f"Machine: {machine()}  ",
+            f"Machine: {machine('numpy', 'numba')}  ",
             f"Date: {datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds')}; "
             f"load average {load0[0]:.2f} before, {load1[0]:.2f} after "
             f"({elapsed:.0f} s of timing; the cores are shared).",

@@ -31,7 +31,6 @@ import argparse
 import dataclasses
 import json
 import os
-import platform
 import subprocess
 import sys
 import time
@@ -39,6 +38,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from benchlib import machine  # noqa: E402
 
 import neurocog_gym  # noqa: F401  (registers the env ids)
 
@@ -104,25 +104,6 @@ def load_average() -> str:
     """The three load averages, as ``uptime`` prints them."""
     one, five, fifteen = os.getloadavg()
     return f"{one:.2f}, {five:.2f}, {fifteen:.2f}"
-
-
-def machine() -> str:
-    cpu = platform.processor() or "?"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import mujoco
-    import stable_baselines3
-    import torch
-
-    return (f"{cpu}, {os.cpu_count()} logical cores, {platform.system()} {platform.release()}, "
-            f"Python {platform.python_version()}, MuJoCo {mujoco.__version__}, Gymnasium "
-            f"{gym.__version__}, stable-baselines3 {stable_baselines3.__version__}, torch "
-            f"{torch.__version__}")  # fmt: skip
 
 
 def _uptime() -> str:
@@ -208,7 +189,7 @@ def part_env(args: Args) -> list[str]:
     lines = [
         "## Env throughput (`scripts/bench_env.py`)",
         "",
-        f"Machine: {machine()}.",
+        f"Machine: {machine('mujoco', 'gymnasium', 'stable_baselines3', 'torch')}.",
         f"Load average before / after: {load0} / {load1}  ",
         f"`uptime` before: `{up0}`  ",
         f"`uptime` after: `{up1}`",
@@ -389,7 +370,7 @@ def part_ppo(args: Args) -> list[str]:
     lines = [
         "## PPO (stable-baselines3) on the obstacle task (`scripts/train_ppo.py`)",
         "",
-        f"Machine: {machine()}.",
+        f"Machine: {machine('mujoco', 'gymnasium', 'stable_baselines3', 'torch')}.",
         f"Load average before / after: {load0} / {load1}  ",
         f"`uptime` before: `{up0}`  ",
         f"`uptime` after: `{up1}`",

@@ -100,7 +100,8 @@ def main(argv: list[str] | None = None) -> None:
     if args.rounds < 1 or not args.seconds > 0:
         ap.error("--rounds must be >= 1 and --seconds > 0")
     sys.path.insert(0, str(ROOT / "scripts"))
-    from bench_env import _uptime, load_average, machine
+    from bench_env import _uptime, load_average
+    from benchlib import machine
 
     rev = subprocess.run(
         ["git", "-C", str(ROOT), "rev-parse", "--short", args.baseline],
@@ -148,7 +149,7 @@ def main(argv: list[str] | None = None) -> None:
     lines = [
         "## Env speed against an earlier commit (`scripts/bench_env_compare.py`)",
         "",
-        f"Machine: {machine()}.  ",
+        f"Machine: {machine('mujoco', 'gymnasium', 'numpy')}.  ",
         f"`uptime` before: `{up0}`; after: `{up1}` (load {load0} / {load1}).",
         "",
         f"Command: `python scripts/bench_env_compare.py --baseline {args.baseline} --rounds "

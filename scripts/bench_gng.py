@@ -21,7 +21,10 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from neurocog_gym.perception import _gng_kernels as K
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import cpu_model  # noqa: E402
+
+from neurocog_gym.perception import _gng_kernels as K  # noqa: E402
 from neurocog_gym.perception.gng import DDGNG, GNG, MLGNG, DDGNGParams, _check_boxes
 from neurocog_gym.perception.gng_oracle import DDGNGOracle
 
@@ -151,16 +154,6 @@ def calibration(reps: int) -> float:
         _calibration_kernel(V, P)
         ts.append(time.perf_counter() - t0)
     return float(np.median(ts))
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def main(args: Args) -> str:

@@ -16,7 +16,6 @@ import argparse
 import dataclasses
 import math
 import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -24,8 +23,10 @@ from pathlib import Path
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import mujoco  # noqa: E402
-import numba  # noqa: E402
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import machine  # noqa: E402
 
 from neurocog_gym.robot import tof as tof_mod  # noqa: E402
 from neurocog_gym.robot.names import RAY_GEOM_GROUPS, ROBOT_GEOM_GROUP, TOF_SITES  # noqa: E402
@@ -129,22 +130,6 @@ class Timer:
                     fn()
                     self.samples[name].append(time.perf_counter() - t0)
         return {name: float(np.median(v) * 1e3) for name, v in self.samples.items() if v}
-
-
-def machine() -> str:
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (
-        f"{cpu}, {os.cpu_count()} logical CPUs (pinned to one), {platform.platform()}; "
-        f"Python {platform.python_version()}, MuJoCo {mujoco.__version__}, "
-        f"NumPy {np.__version__}, Numba {numba.__version__}"
-    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -336,7 +321,7 @@ def main(argv: list[str] | None = None) -> int:
             "",
             f"Command: `{command.strip()}` (package importable: `pip install -e .` or "
             "`PYTHONPATH=.`)  ",
-            f"Machine: {machine()}  ",
+            f"Machine: {machine('mujoco', 'numpy', 'numba', pinned=True)}  ",
             f"Scene: {scene}. Medians over {n} frames ({nr} for full-resolution mj_multiRay), "
             "one process pinned to one core, static pose." + load,
             "",

@@ -36,7 +36,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -44,6 +43,9 @@ from pathlib import Path
 import gymnasium as gym
 import mujoco
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import machine  # noqa: E402
 
 import neurocog_gym  # noqa: F401  (registers the env ids)
 from neurocog_gym.robot.names import LEGS
@@ -311,22 +313,6 @@ def provision_table(args: Args) -> list[str]:
     return lines
 
 
-def machine() -> str:
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (
-        f"{cpu}, {os.cpu_count()} logical CPUs (pinned to one), {platform.platform()}; "
-        f"Python {platform.python_version()}, MuJoCo {mujoco.__version__}, "
-        f"Gymnasium {gym.__version__}, NumPy {np.__version__}"
-    )
-
-
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     if hasattr(os, "sched_setaffinity"):
@@ -355,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
         "# Walk-v0 benchmark",
         "",
         f"Command: `{command.strip()}`  ",
-        f"Machine: {machine()}  ",
+        f"Machine: {machine('mujoco', 'gymnasium', 'numpy', pinned=True)}  ",
         f"Gait: `assets/default_gait.json` ({gait.name!r}, tau_f = {gait.tau_f:g}).",
         "",
         "## 1. Throughput",
