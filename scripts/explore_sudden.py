@@ -7,6 +7,11 @@ Research scratch (not part of the package). Policies are objects with ``reset(en
     .venv/bin/python scripts/explore_sudden.py --policy blind --start 0 --n 100
     .venv/bin/python scripts/explore_sudden.py --policy back-best --start 100 --n 200
     .venv/bin/python scripts/explore_sudden.py --policy back-best --scenario static --n 50
+    .venv/bin/python scripts/explore_sudden.py --policy avoid --seed 2 --n 200 --kw '{"kx": 20}'
+
+``--seed S`` picks the run seed of ``trial_seed(S, scenario, i)``: 0 and 1 are the benchmark's
+(do not tune on them); 2 and 3 are the dev sets of the 2026-11-27 tuning (``docs/avoid_notes.md``).
+``--policy avoid`` is the shipped ``AvoidPolicy`` with ``--kw`` as ``AvoidParams`` overrides.
 
 Best candidate: ``back-best`` = ``BackAround(**BEST)`` (reverse the trot, side-step out of the
 block's lane, walk past; never step over), which the package ships as
@@ -930,6 +935,90 @@ BEST = dict(
 register("back-best")(lambda **kw: BackAround(**{**BEST, **kw}))
 
 
+class Avoid:
+    """The shipped reflex, ``neurocog_gym.avoid.AvoidPolicy``, with ``AvoidParams`` overrides.
+
+    Keys of ``GUARD`` select the back-off variants of the 2026-11-27 session (all worse on the dev
+    set, ``docs/avoid_notes.md``): they change only the ``reverse`` state's interrupts of the legs
+    in the block's lane whose gap to its near face is small.
+    """
+
+    name = "avoid"
+
+    def __init__(self, **kw):
+        from neurocog_gym.avoid import AvoidParams
+
+        guard = {k: kw.pop(k) for k in list(kw) if k in GUARD}
+        self.p = _avoid_variant()(AvoidParams(**kw), {**GUARD, **guard})
+
+    @property
+    def state(self):
+        return self.p.state
+
+    def reset(self, env):
+        self.p.reset(env)
+
+    def __call__(self, obs, env):
+        return self.p(obs)
+
+
+register("avoid")(lambda **kw: Avoid(**kw))
+
+GUARD = dict(
+    guard=0.0,  # legs in the lane with a gap below this (m) are guarded while backing off ...
+    guard_hip=0.0,  # ... hip net activation = this x CPG drive where the reversal would protract
+    guard_knee=None,  # ... knee interrupt of a guarded leg (None: unchanged)
+    guard_air=False,  # ... only legs whose foot is off the ground (touch < 0.05)
+    guard_pd=False,  # ... hip servo held at its most retracted angle by a PD law (Override)
+    no_ext=0.0,  # no stance-knee extension for in-lane legs with a gap below this
+    ext_near=0.0,  # knee extension also for in-lane legs with a gap below this, any phase
+)
+
+
+def _avoid_variant():
+    from neurocog_gym.avoid import _HIPS, _KNEES, AvoidPolicy
+
+    class AvoidVariant(AvoidPolicy):
+        def __init__(self, params, g):
+            super().__init__(params)
+            self.g = g
+
+        def reset(self, env):
+            super().reset(env)
+            self.latch = {}
+            self.ovr = Override(env)
+
+        def _set(self, state, t):
+            if state == "reverse":
+                self.latch = {}
+            super()._set(state, t)
+
+        def _reverse(self, act, drive, inlane, gap, t, obs):
+            p, g, u = self.p, self.g, self._u
+            act[_HIPS] = -p.k_rev * drive / 3.0
+            air = u.touch() < 0.05 if g["guard_air"] else np.ones(4, bool)
+            if p.ext_knee and t - self.t_state < p.ext_time:
+                ext = ~(u.generator.hip_drive > 0)
+                if g["no_ext"]:
+                    ext &= ~(inlane & (gap < g["no_ext"]) & air)
+                if g["ext_near"]:
+                    ext |= inlane & (gap < g["ext_near"])
+                act[_KNEES[ext]] = p.ext_knee
+            if g["guard"] and g["guard_pd"]:
+                q = np.asarray(obs["joint_pos"], dtype=float)
+                for leg in np.flatnonzero(inlane & (gap < g["guard"])):
+                    j = int(_HIPS[leg])
+                    self.latch[leg] = max(self.latch.get(leg, -np.inf), float(q[j]))
+                    act[j] = self.ovr.theta([j], [self.latch[leg]], obs=obs)[j]
+            elif g["guard"]:
+                guarded = inlane & (gap < g["guard"]) & (drive < 0) & air
+                act[_HIPS[guarded]] = (g["guard_hip"] - 1.0) * drive[guarded] / 3.0
+                if g["guard_knee"] is not None:
+                    act[_KNEES[guarded]] = g["guard_knee"]
+
+    return AvoidVariant
+
+
 # ------------------------------------------------------------------------------------------------
 # Trial runner
 # ------------------------------------------------------------------------------------------------
@@ -944,11 +1033,11 @@ def _env(scenario):
 
 
 def run_trial(args):
-    scenario, idx, pname, kw = args
+    scenario, idx, pname, kw, seed = args
     env = _env(scenario)
     u = env.unwrapped
     policy = POLICIES[pname](**kw)
-    obs, info = env.reset(seed=trial_seed(0, scenario, idx))
+    obs, info = env.reset(seed=trial_seed(seed, scenario, idx))
     policy.reset(env)
     names = {
         int(g): mujoco.mj_id2name(u.model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) or f"g{g}"
@@ -956,11 +1045,14 @@ def run_trial(args):
     }
     first = {}
     first_state = None
+    triggered = None
     done = False
     peak = np.zeros(4)
     while not done:
         obs, _, term, trunc, info = env.step(policy(obs, env))
         done = term or trunc
+        if triggered is None and getattr(policy, "state", "walk") != "walk":
+            triggered = round(float(u.data.time), 2)
         if u.pool.blocks:
             d = u.data
             bg = set(u.pool.geom_ids[: len(u.pool.blocks)].tolist())
@@ -983,6 +1075,7 @@ def run_trial(args):
         "leg": getattr(u, "appear_leg", None),
         "contacts": first,
         "first_state": first_state,
+        "triggered": triggered,
         "final_state": getattr(policy, "state", None),
         "torso_xy": [round(float(u.data.qpos[0]), 3), round(float(u.data.qpos[1]), 3)],
         "yaw_deg": round(float(np.degrees(_yaw(u.data.qpos[3:7]))), 1),
@@ -993,8 +1086,8 @@ def run_trial(args):
     }
 
 
-def evaluate(pname, scenario="sudden", start=0, n=100, kw=None, procs=2, verbose=False):
-    jobs = [(scenario, i, pname, kw or {}) for i in range(start, start + n)]
+def evaluate(pname, scenario="sudden", start=0, n=100, kw=None, procs=1, verbose=False, seed=0):
+    jobs = [(scenario, i, pname, kw or {}, seed) for i in range(start, start + n)]
     t0 = time.time()
     if procs > 1:
         with Pool(procs) as pool:
@@ -1010,6 +1103,7 @@ def evaluate(pname, scenario="sudden", start=0, n=100, kw=None, procs=2, verbose
         "policy": pname,
         "kw": kw or {},
         "scenario": scenario,
+        "seed": seed,
         "start": start,
         "n": n,
         "success": c["success"],
@@ -1027,11 +1121,14 @@ def main():
     ap.add_argument("--scenario", default="sudden")
     ap.add_argument("--start", type=int, default=0)
     ap.add_argument("--n", type=int, default=20)
-    ap.add_argument("--procs", type=int, default=2)
+    ap.add_argument("--procs", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=0, help="run seed of trial_seed (dev: 2, 3)")
     ap.add_argument("--kw", default="{}")
     ap.add_argument("-v", action="store_true")
     a = ap.parse_args()
-    summ, res = evaluate(a.policy, a.scenario, a.start, a.n, json.loads(a.kw), a.procs, a.v)
+    summ, res = evaluate(
+        a.policy, a.scenario, a.start, a.n, json.loads(a.kw), a.procs, a.v, seed=a.seed
+    )
     print(json.dumps(summ))
 
 

@@ -46,3 +46,25 @@ def test_the_policy_must_be_bound_to_an_obstacle_env():
     assert action.shape == (15,) and action.dtype == np.float32
     with pytest.raises(ValueError, match="needs an obstacle env"):
         policy.reset(gym.make("NeuroCog/Walk-v0"))
+
+
+def test_leg_gap_reaches_from_the_sole_up_to_the_knee():
+    """A leg's front point at a block's height: the sole's front below the shank, the knee (or
+    the thigh) once the block's top is above them."""
+    from neurocog_gym.avoid import FOOT_RADIUS, AvoidPolicy
+
+    env = make_env("sudden", "on", None)
+    try:
+        env.reset(seed=trial_seed(0, "sudden", 0))
+        policy = AvoidPolicy()
+        policy.reset(env)
+        u = env.unwrapped
+        feet = u._feet()
+        knees = u.data.xpos[u.robot.hip_body + 2]
+        low = policy._reach(feet, 0.0)
+        high = policy._reach(feet, 1.0)
+        np.testing.assert_allclose(low, feet[:, 0] + FOOT_RADIUS)
+        assert np.all(high >= low) and np.all(high >= knees[:, 0])
+        assert np.all(np.diff([policy._reach(feet, z) for z in (0.0, 0.05, 0.1, 0.2)], axis=0) >= 0)
+    finally:
+        env.close()
