@@ -1,0 +1,77 @@
+"""A picture strip of the avoid reflex on a sudden block (the README's strip).
+
+One seeded ``NeuroCog/SuddenObstacle-v0`` episode under ``--policy avoid``, rendered with the
+attention graph, facets and footholds drawn in; four frames side by side: trotting just before
+the block appears, the back-off under way, the first frame of the side step's end (the reflex
+enters "pass"), and the robot walking past near the end of the episode.
+
+    MUJOCO_GL=egl .venv/bin/python scripts/render_strip.py --seed 1
+
+The matching video:
+``neurocog record-video --policy avoid --seed 1 --out docs/img/avoid_sudden.mp4``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import gymnasium as gym  # noqa: E402
+import imageio.v3 as iio  # noqa: E402
+import numpy as np  # noqa: E402
+
+import neurocog_gym  # noqa: E402, F401  (registers the env ids)
+from neurocog_gym.avoid import AvoidPolicy  # noqa: E402
+from neurocog_gym.policies import start_episode  # noqa: E402
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seed", type=int, default=1, help="episode seed")
+    ap.add_argument("--width", type=int, default=400, help="width of one frame, pixels")
+    ap.add_argument("--height", type=int, default=360, help="frame height, pixels")
+    ap.add_argument("--camera", default="follow", help="scene camera: follow, side or overhead")
+    ap.add_argument("--out", default="docs/img/avoid_sudden_strip.png", help="PNG to write")
+    args = ap.parse_args(argv)
+    env = gym.make(
+        "NeuroCog/SuddenObstacle-v0",
+        render_mode="rgb_array",
+        width=args.width,
+        height=args.height,
+        camera_name=args.camera,
+    )
+    obs, _ = env.reset(seed=args.seed)
+    policy = AvoidPolicy()
+    start_episode(policy, env)
+    u = env.unwrapped
+    frames, states, times, appeared = [], [], [], None
+    done = False
+    while not done:
+        obs, _, terminated, truncated, _ = env.step(policy(obs))
+        done = terminated or truncated
+        frames.append(env.render())
+        states.append(policy.state)
+        times.append(float(u.data.time))
+        if appeared is None and u.appeared_at is not None:
+            appeared = len(frames) - 1
+    env.close()
+    if appeared is None:
+        raise SystemExit(f"seed {args.seed}: no block appeared; try another seed")
+    dt = times[1] - times[0]
+    before = max(appeared - int(0.05 / dt), 0)
+    backing = min(appeared + int(0.15 / dt), len(frames) - 1)
+    passing = next((i for i, s in enumerate(states) if s == "pass"), len(frames) // 2)
+    last = max(len(frames) - 1 - int(0.3 / dt), passing)
+    picks = [before, backing, passing, last]
+    strip = np.concatenate([frames[i] for i in picks], axis=1)
+    iio.imwrite(args.out, strip)
+    print(
+        f"wrote {args.out}: frames at t = {', '.join(f'{times[i]:.2f}' for i in picks)} s "
+        f"(block appeared at {times[appeared]:.2f} s; episode {times[-1]:.2f} s)"
+    )
+
+
+if __name__ == "__main__":
+    main()
