@@ -21,7 +21,8 @@ def test_env_part_writes_every_row(tmp_path):
     text = out.read_text()
     for row in ("full perception, default settings", "`Ant-v5`, random actions",
                 "154,112 rays a frame", "'async')", "'sync')", "load average",
-                "ToF sensing", "**whole step**"):  # fmt: skip
+                "ToF sensing", "**whole step**", "| pinned + FlattenObservation |",
+                "two independent processes", "inside `env.step`"):  # fmt: skip
         assert row in text
 
 
