@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 
 import neurocog_gym  # noqa: E402, F401  (registers the env ids)
 from neurocog_gym.avoid import AvoidPolicy  # noqa: E402
+from neurocog_gym.io import atomic_path  # noqa: E402
 from neurocog_gym.policies import start_episode  # noqa: E402
 
 
@@ -66,7 +67,8 @@ def main(argv: list[str] | None = None) -> None:
     last = max(len(frames) - 1 - int(0.3 / dt), passing)
     picks = [before, backing, passing, last]
     strip = np.concatenate([frames[i] for i in picks], axis=1)
-    iio.imwrite(args.out, strip)
+    with atomic_path(args.out) as tmp:
+        iio.imwrite(tmp, strip)
     print(
         f"wrote {args.out}: frames at t = {', '.join(f'{times[i]:.2f}' for i in picks)} s "
         f"(block appeared at {times[appeared]:.2f} s; episode {times[-1]:.2f} s)"
