@@ -1,9 +1,9 @@
 """Record an episode of any registered env to an MP4, with the perception overlay drawn in.
 
-The obstacle envs' ``rgb_array`` frames carry the DD-GNG nodes and edges coloured by the kind of
-surface their facets belong to, the attention boxes and the predicted footholds (green safe, red
-unsafe) — see ``envs.obstacle.overlay_markers``. ``NeuroCog/Walk-v0`` has no perception, so its
-frames are the plain scene.
+The obstacle envs' ``rgb_array`` frames carry the DD-GNG's facets filled by the kind of surface
+they belong to (terrain, wall, object), its nodes and edges, the attention boxes and the
+predicted footholds (green safe, red unsafe) — see ``envs.obstacle.overlay_markers``.
+``NeuroCog/Walk-v0`` has no perception, so its frames are the plain scene.
 """
 
 from __future__ import annotations

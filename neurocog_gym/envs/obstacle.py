@@ -301,9 +301,10 @@ class ObstacleEnv(QuadrupedEnv):
     def render(self):
         """Render the scene, or the ToF depth images.
 
-        ``rgb_array``/``human``: the scene with the DD-GNG graph, its labels, the attention boxes
-        and the predicted footholds drawn in (``draw_overlay``); ``depth_array``: the four ToF
-        depth images side by side, (H, 4 W) float32 metres, 0 where invalid.
+        ``rgb_array``/``human``: the scene with the DD-GNG graph, its facets filled by surface
+        kind, the attention boxes and the predicted footholds drawn in (``draw_overlay``);
+        ``depth_array``: the four ToF depth images side by side, (H, 4 W) float32 metres, 0
+        where invalid.
         """
         if self.render_mode == "depth_array":
             if self.frame is None:
@@ -324,9 +325,24 @@ _KIND_RGBA = {
     "object": np.array([1.0, 0.2, 0.15, 1.0]),
 }
 _NODE_RGBA = np.array([1.0, 0.9, 0.1, 1.0])
+_GREY_EDGE = np.array([0.6, 0.6, 0.6, 0.8])
 
 
-def _segment_marker(a: np.ndarray, b: np.ndarray, radius: float, rgba: np.ndarray) -> dict:
+def _edge_rgba(kind: str | None) -> np.ndarray:
+    if kind is None:
+        return _GREY_EDGE
+    rgba = 0.4 * _KIND_RGBA[kind] + 0.6
+    rgba[3] = 0.9
+    return rgba
+
+
+def _segment_marker(a: np.ndarray, b: np.ndarray, width: float, rgba: np.ndarray) -> dict:
+    """A line from ``a`` to ``b`` (metres), ``width`` pixels wide.
+
+    MuJoCo's ``mjGEOM_LINE`` runs along its frame's z axis from ``pos`` for ``size[2]`` metres.
+    A line is one draw call; a capsule per edge made the software (EGL) renderer several times
+    slower.
+    """
     import mujoco
 
     d = b - a
@@ -336,19 +352,77 @@ def _segment_marker(a: np.ndarray, b: np.ndarray, radius: float, rgba: np.ndarra
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
     return {
-        "type": mujoco.mjtGeom.mjGEOM_CAPSULE,
-        "size": np.array([radius, length / 2, 0.0]),
-        "pos": (a + b) / 2,
+        "type": mujoco.mjtGeom.mjGEOM_LINE,
+        "size": np.array([width, width, length]),
+        "pos": np.array(a, dtype=np.float64),
         "mat": np.column_stack([x, y, z]).ravel(),
         "rgba": rgba,
     }
 
 
-def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
+def triangle_markers(
+    a: np.ndarray,
+    b: np.ndarray,
+    c: np.ndarray,
+    normal: np.ndarray,
+    rgba: np.ndarray,
+    lift: float = 0.0,
+) -> list[dict]:
+    """Markers that fill the triangles ``a[i], b[i], c[i]`` ((F, 3) each, metres).
+
+    MuJoCo draws only right triangles (``mjGEOM_TRIANGLE``: corners (0, 0, 0), (size[0], 0, 0)
+    and (0, size[1], 0) in the marker's frame), so each triangle is cut along the altitude onto
+    its longest side (whose foot lies on that side) into two right triangles. Their frames are
+    turned so the lit side faces ``normal`` ((F, 3)); ``lift`` moves them along it (metres, to
+    keep them off a surface they lie on). Degenerate triangles give no marker.
+    """
+    import mujoco
+
+    pts = np.stack([a, b, c], axis=1).astype(np.float64)  # (F, 3 corners, 3)
+    if len(pts) == 0:
+        return []
+    opposite = np.stack(
+        [np.linalg.norm(pts[:, (k + 2) % 3] - pts[:, (k + 1) % 3], axis=1) for k in range(3)],
+        axis=1,
+    )
+    k = np.argmax(opposite, axis=1)
+    rows = np.arange(len(pts))
+    apex, p, q = pts[rows, k], pts[rows, (k + 1) % 3], pts[rows, (k + 2) % 3]
+    d = q - p
+    dd = np.einsum("ij,ij->i", d, d)
+    t = np.einsum("ij,ij->i", apex - p, d) / np.maximum(dd, 1e-300)
+    foot = p + t[:, None] * d
+    h = apex - foot
+    hl = np.linalg.norm(h, axis=1)
+    normal = np.asarray(normal, dtype=np.float64)
+    markers: list[dict] = []
+    for i in np.flatnonzero((dd > 1e-18) & (hl > 1e-9)):
+        y = h[i] / hl[i]
+        for end in (p[i], q[i]):
+            e = end - foot[i]
+            el = float(np.linalg.norm(e))
+            if el <= 1e-9:
+                continue
+            x = e / el
+            z = np.cross(x, y)
+            if z @ normal[i] >= 0.0:
+                mat, size = np.column_stack([x, y, z]), (el, hl[i], 0.0)
+            else:  # swap the legs: the frame stays right-handed, its z turns over
+                mat, size = np.column_stack([y, x, -z]), (hl[i], el, 0.0)
+            markers.append({"type": mujoco.mjtGeom.mjGEOM_TRIANGLE, "size": np.array(size),
+                            "pos": foot[i] + lift * normal[i], "mat": mat.ravel(),
+                            "rgba": rgba[i] if np.ndim(rgba) == 2 else rgba})  # fmt: skip
+    return markers
+
+
+def overlay_markers(
+    env: ObstacleEnv, max_edges: int = 1500, facet_alpha: float = 0.45
+) -> list[dict]:
     """Visual markers of the perception state.
 
-    Graph nodes and edges coloured by the kind of surface their facets belong to, attention
-    boxes, and footholds (green safe, red unsafe).
+    The facets filled and the graph nodes and edges coloured by the kind of surface their
+    label is (terrain green, wall blue, object red), attention boxes, and footholds (green
+    safe, red unsafe).
     """
     import mujoco
 
@@ -359,6 +433,14 @@ def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
     aff = env.pipeline.last
     node_kind = {}
     if aff is not None and len(aff.facets):
+        tri = aff.facets
+        if len(nodes) > int(tri.max()):  # the facets index this cycle's graph
+            rgba = np.array([_KIND_RGBA[aff.label_kinds[lab]] for lab in aff.facet_labels])
+            rgba[:, 3] = facet_alpha
+            markers += triangle_markers(
+                nodes[tri[:, 0]], nodes[tri[:, 1]], nodes[tri[:, 2]], aff.facet_normals, rgba,
+                lift=0.002,
+            )  # fmt: skip
         for f, lab in zip(aff.facets, aff.facet_labels, strict=True):
             kind = aff.label_kinds[lab]
             for i in f:
@@ -371,10 +453,9 @@ def overlay_markers(env: ObstacleEnv, max_edges: int = 1500) -> list[dict]:
     for a, b in edges[:max_edges]:
         ka, kb = node_kind.get(int(a)), node_kind.get(int(b))
         kind = ka if ka == kb else None
-        rgba = (
-            _KIND_RGBA[kind] * np.array([1, 1, 1, 0.8]) if kind else np.array([0.9, 0.9, 0.9, 0.5])
-        )
-        markers.append(_segment_marker(nodes[a], nodes[b], 0.0025, rgba))
+        # Edges a paler tint of their facets' kind (on no facet, or between kinds: grey).
+        rgba = _edge_rgba(kind)
+        markers.append(_segment_marker(nodes[a], nodes[b], 2.0, rgba))
     for box in env.pipeline.attention_boxes:
         markers.append({"type": mujoco.mjtGeom.mjGEOM_BOX, "size": (box[1] - box[0]) / 2,
                         "pos": (box[1] + box[0]) / 2,
