@@ -39,6 +39,26 @@ def test_sudden_obstacle_appears_in_the_swing_path_of_a_front_leg():
         assert 0.055 <= box[1, 2] <= 0.085
 
 
+def test_sudden_obstacle_appears_as_the_leg_swings():
+    """The block appears at a real lift-off: the CPG is in that leg's swing phase and its foot
+    rises within 0.08 s. (Triggered by the touch signal alone, 25 of 40 blocks appeared on a
+    foot that stayed planted: its contact flickers in mid-stance.)"""
+    env = gym.make(SUDDEN)
+    u = env.unwrapped
+    lifted = []
+    for seed in range(100, 112):
+        env.reset(seed=seed)
+        _walk_until(env, lambda i: u.appeared_at is not None)
+        leg = u.appear_leg
+        assert u.generator.swinging[leg]
+        z = []
+        for _ in range(8):
+            env.step(np.zeros(15, np.float32))
+            z.append(u.data.site_xpos[u.robot.foot_site[leg], 2])
+        lifted.append(max(z) > 0.03)
+    assert np.mean(lifted) >= 0.75
+
+
 def test_sudden_obstacle_never_appears_inside_the_robot():
     """Placed by hand in front of the robot, not into it: at appearance every block keeps
     min_gap from every robot geom. (Without the placement check, 18 of the first 100 benchmark
