@@ -42,3 +42,22 @@ def test_nsga_candidates_script(tmp_path):
     assert c["reference_env"] and all("drift_per_10m" in r for r in c["reference_env"])
     # A candidate is written only when one meets every rule; never over the shipped default.
     assert (run / "candidate_gait.json").exists() == (c["winner"] is not None)
+
+
+def test_recheck_trials_finds_a_changed_record(tmp_path):
+    from neurocog_gym.bench.runner import BenchConfig, run_benchmark
+
+    run = tmp_path / "run"
+    run_benchmark(BenchConfig(scenarios=("static",), trials=2, policy="blind", max_seconds=0.3,
+                              workers=1, out=run, progress=False))  # fmt: skip
+    res = _script("recheck_trials.py", run, "--scenario", "static", "--every", "1")
+    assert "2 of 2 re-run trials identical" in res.stdout
+    # A record that the code does not reproduce is reported, with a failing exit status.
+    trials = run / "trials.jsonl"
+    rows = [json.loads(line) for line in trials.read_text().splitlines()]
+    rows[1]["steps"] += 1
+    trials.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    res = subprocess.run([sys.executable, str(ROOT / "scripts" / "recheck_trials.py"), str(run),
+                          "--every", "1"], capture_output=True, text=True, cwd=ROOT)  # fmt: skip
+    assert res.returncode == 1
+    assert "DIFF" in res.stdout and "'steps'" in res.stdout and "1 of 2 re-run" in res.stdout
