@@ -10,9 +10,15 @@ Files in ``--out``: ``args.json``, ``checkpoints/ppo_<steps>_steps.zip`` (every
 ``--checkpoint-every`` env steps), ``tb/`` (TensorBoard: ``tensorboard --logdir OUT/tb``; besides
 SB3's losses it logs ``outcome/success``, ``outcome/touch``, ``outcome/fail`` over finished
 episodes), ``model.zip`` (the final model) and ``train_summary.json`` (steps, wall time,
-steps/s, outcome counts). ``--resume`` continues from the newest checkpoint (or ``model.zip``)
-up to ``--total-steps``. No observation normalisation: the saved zip alone is the policy, so
-``neurocog bench --policy OUT/model.zip`` evaluates it.
+steps/s, outcome counts, fails split into fell / stuck). ``--resume`` continues from the newest
+checkpoint (or ``model.zip``) up to ``--total-steps``. Observations are normalised by SB3's
+``VecNormalize`` (``--no-normalize-obs`` turns it off): its running statistics are saved as
+``vecnormalize.pkl`` beside ``model.zip`` and ``ppo_vecnormalize_<steps>_steps.pkl`` beside each
+checkpoint (written before the zip, both atomically), restored on ``--resume``, and loaded by
+``neurocog_gym.policies.SB3Policy``, so ``neurocog bench --policy OUT/model.zip`` evaluates the
+policy as it was trained. The defaults (small action spread, learning rate 3e-5, 2048-step
+rollouts, ``target_kl`` 0.02) come from the short diagnostic trainings in
+``docs/benchmarks_ppo.md``.
 
     python scripts/train_ppo.py --total-steps 200000 --n-envs 2 --out runs/ppo
     python scripts/train_ppo.py --out runs/ppo --resume            # after a kill
@@ -46,14 +52,15 @@ class Args:
     """subproc (one process per env, SubprocVecEnv) or dummy (in this process)."""
     seed: int = 0
     """Seed of the envs (env i gets seed + i), the policy initialisation and the sampling."""
-    n_steps: int = 512
+    n_steps: int = 2048
     """Rollout length per env and update."""
-    batch_size: int = 256
+    batch_size: int = 512
     """Minibatch size."""
     n_epochs: int = 10
     """Epochs over each rollout."""
-    learning_rate: float = 3e-4
-    """Adam step size."""
+    learning_rate: float = 3e-5
+    """Adam step size (small: an interrupt of 0.1 is 30 % of the CPG's authority over a joint,
+    and larger steps moved the policy's mean off the CPG walk faster than it learned)."""
     gamma: float = 0.99
     """Discount."""
     gae_lambda: float = 0.95
@@ -62,8 +69,18 @@ class Args:
     """PPO clip range."""
     ent_coef: float = 0.0
     """Entropy bonus."""
-    log_std_init: float = -1.0
-    """Initial log std of the Gaussian actions (-1: spread 0.37 around zero = CPG walking)."""
+    target_kl: float = 0.02
+    """Stop an update's epochs early once the approximate KL to the rollout policy exceeds
+    1.5 x this (SB3's target_kl); 0 for no limit."""
+    log_std_init: float = -2.0
+    """Initial log std of the Gaussian actions (-2: spread 0.135 around zero = CPG walking;
+    with -1, spread 0.37, the zero-mean policy passed 1 sudden block in 20)."""
+    normalize_obs: bool = True
+    """Normalise the observations with VecNormalize (running mean / std of every Box key);
+    its statistics are saved as OUT/vecnormalize.pkl beside model.zip (and with every
+    checkpoint), where ``neurocog bench --policy OUT/model.zip`` finds them."""
+    normalize_reward: bool = False
+    """Scale the rewards by VecNormalize's running std of the discounted return (training only)."""
     net_arch: str = "128,128"
     """Hidden layer widths of the policy and value networks."""
     checkpoint_every: int = 20_000
@@ -89,7 +106,7 @@ def parse_args(argv: list[str] | None = None) -> Args:
     )
     for f in dataclasses.fields(Args):
         name = "--" + f.name.replace("_", "-")
-        help_ = _field_doc(f.name)
+        help_ = _field_doc(f.name).replace("%", "%%")  # argparse formats help with %
         if isinstance(f.default, bool):
             parser.add_argument(name, action=argparse.BooleanOptionalAction, default=f.default,
                                 help=help_)  # fmt: skip
@@ -101,8 +118,8 @@ def parse_args(argv: list[str] | None = None) -> Args:
         parser.error("--total-steps, --n-envs must be >= 1; --n-steps, --batch-size >= 2")
     if args.vec not in ("subproc", "dummy"):
         parser.error(f"--vec must be subproc or dummy, got {args.vec!r}")
-    if args.checkpoint_every < 1 or args.max_minutes < 0:
-        parser.error("--checkpoint-every must be >= 1, --max-minutes >= 0")
+    if args.checkpoint_every < 1 or args.max_minutes < 0 or args.target_kl < 0:
+        parser.error("--checkpoint-every must be >= 1, --max-minutes >= 0, --target-kl >= 0")
     try:
         _net_arch(args.net_arch)
     except ValueError:
@@ -113,8 +130,8 @@ def parse_args(argv: list[str] | None = None) -> Args:
 def _field_doc(name: str) -> str:
     """The docstring under a dataclass field (read from this file's source)."""
     src = Path(__file__).read_text()
-    m = re.search(rf"^    {name}: .*\n    \"\"\"(.*?)\"\"\"", src, flags=re.M)
-    return m.group(1) if m else ""
+    m = re.search(rf"^    {name}: [^\n]*\n    \"\"\"(.*?)\"\"\"", src, flags=re.M | re.S)
+    return " ".join(m.group(1).split()) if m else ""
 
 
 def _net_arch(text: str) -> list[int]:
@@ -151,15 +168,59 @@ def _latest_checkpoint(out: Path) -> Path | None:
     return out / "model.zip" if (out / "model.zip").exists() else None
 
 
+def stats_path(model: Path) -> Path:
+    """Where the VecNormalize statistics of a saved model live: ``vecnormalize.pkl`` beside
+    ``model.zip``, ``ppo_vecnormalize_<steps>_steps.pkl`` beside ``ppo_<steps>_steps.zip``
+    (SB3's CheckpointCallback naming), where ``neurocog_gym.policies.SB3Policy`` looks."""
+    from neurocog_gym.policies import vecnormalize_path
+
+    return vecnormalize_path(model)
+
+
+def _box_keys(space) -> list[str] | None:
+    """The Box keys of a Dict observation space (VecNormalize normalises only those)."""
+    import gymnasium as gym
+
+    if not isinstance(space, gym.spaces.Dict):
+        return None
+    return [k for k, s in space.spaces.items() if isinstance(s, gym.spaces.Box)]
+
+
+def _normalized(env, args: Args, stats: Path | None):
+    """Wrap ``env`` in VecNormalize: fresh statistics, or those saved at ``stats`` (resume)."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    if stats is not None:
+        venv = VecNormalize.load(str(stats), env)
+        venv.training = True
+        return venv
+    return VecNormalize(
+        env, norm_obs=args.normalize_obs, norm_reward=args.normalize_reward,
+        norm_obs_keys=_box_keys(env.observation_space) if args.normalize_obs else None,
+        gamma=args.gamma,
+    )  # fmt: skip
+
+
+def _save_stats(venv, path: Path) -> None:
+    from neurocog_gym.io import atomic_path
+
+    with atomic_path(path) as tmp:
+        venv.save(str(tmp))
+
+
 def _outcome_callback():
     from stable_baselines3.common.callbacks import BaseCallback
 
     class OutcomeCallback(BaseCallback):
-        """Counts the outcome of every finished obstacle episode; logs the shares."""
+        """Counts the outcome of every finished obstacle episode; logs the shares.
+
+        ``fails`` splits the fails into ``fell`` (fell or physics fault) and ``stuck`` (not
+        passed when the time limit ran out)."""
 
         def __init__(self):
             super().__init__()
             self.counts = {"success": 0, "touch": 0, "fail": 0}
+            self.fails = {"fell": 0, "stuck": 0}
             self._recent: list[str] = []
 
         def _on_step(self) -> bool:
@@ -170,6 +231,9 @@ def _outcome_callback():
                     if not info.get("passed"):
                         o = "fail"
                     self.counts[o] += 1
+                    if o == "fail":
+                        fell = info.get("fell") or info.get("sim_unstable")
+                        self.fails["fell" if fell else "stuck"] += 1
                     self._recent = (self._recent + [o])[-100:]
             return True
 
@@ -177,6 +241,8 @@ def _outcome_callback():
             if self._recent:
                 for o in self.counts:
                     self.logger.record(f"outcome/{o}", self._recent.count(o) / len(self._recent))
+            for k, n in self.fails.items():
+                self.logger.record(f"outcome/total_{k}", n)
 
     return OutcomeCallback()
 
@@ -212,8 +278,20 @@ def train(args: Args) -> dict:
         raise FileNotFoundError(f"--resume: no checkpoint or model.zip in {out}")
     if not args.resume and (out / "model.zip").exists():
         raise FileExistsError(f"{out}/model.zip exists: pass --resume or another --out")
+    stats = stats_path(ckpt) if ckpt is not None else None
+    if stats is not None and not stats.exists():
+        stats = None
+    use_stats = args.normalize_obs or args.normalize_reward
+    if ckpt is not None and (stats is not None) != use_stats:
+        have, flag = ("has", "--normalize-obs") if stats else ("has no", "--no-normalize-obs")
+        raise ValueError(f"--resume: {ckpt} {have} VecNormalize statistics; pass {flag}")
+    if not args.resume:
+        # A killed earlier run's statistics must not be taken for this model's.
+        (out / "vecnormalize.pkl").unlink(missing_ok=True)
     atomic_write_text(out / "args.json", json.dumps(dataclasses.asdict(args), indent=2) + "\n")
     env = _make_vec_env(args)
+    if use_stats:
+        env = _normalized(env, args, stats)
     tb = str(out / "tb") if args.tensorboard else None
     if ckpt is not None:
         model = PPO.load(ckpt, env=env, device="cpu", tensorboard_log=tb)
@@ -227,6 +305,7 @@ def train(args: Args) -> dict:
             policy, env, n_steps=args.n_steps, batch_size=args.batch_size, n_epochs=args.n_epochs,
             learning_rate=args.learning_rate, gamma=args.gamma, gae_lambda=args.gae_lambda,
             clip_range=args.clip_range, ent_coef=args.ent_coef, seed=args.seed, device="cpu",
+            target_kl=args.target_kl if args.target_kl > 0 else None,
             tensorboard_log=tb, verbose=0,
             policy_kwargs={"log_std_init": args.log_std_init, "net_arch": _net_arch(args.net_arch)},
         )  # fmt: skip
@@ -240,7 +319,11 @@ def train(args: Args) -> dict:
 
         def _on_step(self) -> bool:
             if self.n_calls % self.save_freq == 0:
-                with atomic_path(Path(self._checkpoint_path(extension="zip"))) as tmp:
+                zip_path = Path(self._checkpoint_path(extension="zip"))
+                venv = self.model.get_vec_normalize_env()
+                if venv is not None:  # the statistics first: a zip always has its own
+                    _save_stats(venv, stats_path(zip_path))
+                with atomic_path(zip_path) as tmp:
                     self.model.save(tmp)
             return True
 
@@ -257,6 +340,9 @@ def train(args: Args) -> dict:
             tb_log_name="ppo", progress_bar=args.progress,
         )  # fmt: skip
     elapsed = time.perf_counter() - t0
+    venv = model.get_vec_normalize_env()
+    if venv is not None:
+        _save_stats(venv, stats_path(out / "model.zip"))
     with atomic_path(out / "model.zip") as tmp:
         model.save(tmp)
     env.close()
@@ -270,6 +356,8 @@ def train(args: Args) -> dict:
         "wall_s": round(elapsed, 2),
         "steps_per_s": round(steps / elapsed, 1) if elapsed > 0 and steps else None,
         "outcomes_this_session": outcome.counts,
+        "fails_this_session": outcome.fails,
+        "normalize_obs": args.normalize_obs,
         "model": str(out / "model.zip"),
     }
     atomic_write_text(out / "train_summary.json", json.dumps(summary, indent=2) + "\n")
@@ -284,7 +372,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"train_ppo: error: {e}", file=sys.stderr)
         return 2
     print(f"{s['total_steps']} steps ({s['steps_this_session']} now) in {s['wall_s']:.0f} s "
-          f"({s['steps_per_s']} steps/s); outcomes {s['outcomes_this_session']}; "
+          f"({s['steps_per_s']} steps/s); outcomes {s['outcomes_this_session']} "
+          f"(fails {s['fails_this_session']}); "
           f"model: {s['model']}")  # fmt: skip
     return 0
 

@@ -43,7 +43,8 @@ class SuddenObstacleEnv(ObstacleEnv):
     ## Rewards
 
     As ``NeuroCog/Walk-v0``, plus ``reward_touch`` = -1 on each new contact with an obstacle and
-    ``reward_pass`` = +10 when the robot passes.
+    ``reward_pass`` = +100 when the robot passes (the episode ends there; 100 = 1 / (1 - 0.99)
+    stands in for the walk that would follow, see ``_reward``).
 
     ## Episode end and outcome
 
@@ -170,9 +171,17 @@ class SuddenObstacleEnv(ObstacleEnv):
         return out
 
     def _reward(self, x_vel: float, power: float) -> tuple[float, dict]:
+        """The walk's reward, ``reward_touch`` -1 per new contact, ``reward_pass`` +100 on passing.
+
+        Passing ends the episode, so its bonus stands in for the walk that would follow it:
+        100 = 1 / (1 - 0.99), what walking on at the best per-step reward (1) would be worth at
+        the usual discount 0.99. A smaller bonus makes passing a loss to a learner: ending the
+        episode forfeits the walk, while dawdling in front of the block until the time limit
+        truncates the episode keeps it (learners bootstrap on truncation).
+        """
         r, terms = super()._reward(x_vel, power)
         touch = -1.0 if (self._was_touching and self.touch_events and self._new_touch()) else 0.0
-        passed = 10.0 if self.passed else 0.0
+        passed = 100.0 if self.passed else 0.0
         terms.update(reward_touch=touch, reward_pass=passed)
         return r + touch + passed, terms
 

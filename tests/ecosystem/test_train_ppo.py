@@ -36,9 +36,14 @@ def test_train_resume_and_bench_the_model(tmp_path):
     s = json.loads((out / "train_summary.json").read_text())
     assert s["total_steps"] == 256 and s["n_envs"] == 2 and s["vec"] == "subproc"
     assert (out / "model.zip").is_file()
+    assert (out / "vecnormalize.pkl").is_file()  # observation statistics beside the model
+    assert s["normalize_obs"] is True
+    assert sum(s["fails_this_session"].values()) == s["outcomes_this_session"]["fail"]
     assert sorted(p.name for p in (out / "checkpoints").iterdir()) == [
         "ppo_128_steps.zip",
         "ppo_256_steps.zip",
+        "ppo_vecnormalize_128_steps.pkl",
+        "ppo_vecnormalize_256_steps.pkl",
     ]
     assert any((out / "tb").rglob("events.out.tfevents.*"))
     assert json.loads((out / "args.json").read_text())["total_steps"] == 256
@@ -46,11 +51,22 @@ def test_train_resume_and_bench_the_model(tmp_path):
     # a second start without --resume refuses to overwrite; with it, it continues
     r = _run(str(SCRIPT), "--total-steps", "256", "--out", str(out), *TINY)
     assert r.returncode == 2 and "--resume" in r.stderr
+    # the checkpoint has statistics: resuming without normalisation is refused
+    r = _run(str(SCRIPT), "--total-steps", "384", "--out", str(out), "--resume",
+             "--no-normalize-obs", *TINY)  # fmt: skip
+    assert r.returncode == 2 and "VecNormalize statistics" in r.stderr
+    stats_256 = (out / "checkpoints" / "ppo_vecnormalize_256_steps.pkl").read_bytes()
     r = _run(str(SCRIPT), "--total-steps", "384", "--out", str(out), "--resume", *TINY)
     assert r.returncode == 0, r.stderr
     assert "resuming from" in r.stdout and "ppo_256_steps.zip" in r.stdout
     s = json.loads((out / "train_summary.json").read_text())
     assert s["total_steps"] == 384 and s["steps_this_session"] == 128
+    # the resumed session went on from the checkpoint's statistics, and updated them
+    import pickle
+
+    before = pickle.loads(stats_256).obs_rms["joint_vel"]
+    after = pickle.loads((out / "vecnormalize.pkl").read_bytes()).obs_rms["joint_vel"]
+    assert before.count + 128 <= after.count <= before.count + 128 + 2  # + the reset obs
 
     bench = tmp_path / "bench"
     r = _run(
@@ -80,5 +96,7 @@ def test_bad_arguments_exit_2():
     assert r.returncode == 2 and "--n-envs" in r.stderr
     r = _run(str(SCRIPT), "--vec", "threads")
     assert r.returncode == 2 and "--vec" in r.stderr
+    r = _run(str(SCRIPT), "--target-kl", "-0.1")
+    assert r.returncode == 2 and "--target-kl" in r.stderr
     r = _run(str(SCRIPT), "--resume", "--out", "/nonexistent/ppo_run")
     assert r.returncode == 2 and "no checkpoint" in r.stderr

@@ -161,3 +161,46 @@ def test_perception_sees_a_placed_block():
     inside = np.all((pts >= box[0] - 0.01) & (pts <= box[1] + 0.01), axis=1)
     assert inside.sum() > 20
     assert pts[inside, 2].max() == pytest.approx(box[1, 2], abs=0.01)
+
+
+def _terms_add_up(r, info):
+    parts = ("reward_tracking", "reward_energy", "reward_touch", "reward_pass")
+    return r == pytest.approx(sum(info[k] for k in parts))
+
+
+def test_reward_touch_penalty_once_per_contact_then_pass_bonus():
+    """-1 on the cycle a new contact begins (not while it lasts), +100 on the passing cycle."""
+    env = gym.make(STATIC, n_blocks=(1, 1))
+    env.reset(seed=0)
+    u = env.unwrapped
+    foot = u.data.site_xpos[u.robot.foot_site[0]].copy()
+    u.pool.place(u.model, u.data, [Block(foot[0] + 0.06, foot[1], 0.06, 0.06, 0.06)])
+    touches = []
+    for _ in range(200):
+        _, r, term, trunc, info = env.step(np.zeros(15, np.float32))
+        assert _terms_add_up(r, info) and info["reward_pass"] == 0.0 and not term
+        touches.append(info["reward_touch"])
+        if info["touch_events"] >= 1 and not u._was_touching:
+            break  # the first contact has ended
+    assert info["touch_events"] >= 1 and touches.count(-1.0) == info["touch_events"]
+    assert set(touches) <= {0.0, -1.0}
+    u.data.qpos[0] += 1.0
+    mujoco.mj_forward(u.model, u.data)
+    _, r, term, _, info = env.step(np.zeros(15, np.float32))
+    assert term and info["passed"] and info["reward_pass"] == 100.0 and _terms_add_up(r, info)
+
+
+def test_sudden_pass_bonus_outweighs_walking_on():
+    """Passing ends the episode: its bonus is at least the discounted (0.99) value of walking on
+    at the best per-step reward (1), so passing is never worth less than not passing."""
+    env = gym.make(SUDDEN)
+    env.reset(seed=0)
+    u = env.unwrapped
+    _, info, term, _ = _walk_until(env, lambda i: u.appeared_at is not None)
+    assert not term and info["reward_pass"] == 0.0
+    u.data.qpos[0] = u.pool.boxes()[:, 1, 0].max() + 0.5
+    mujoco.mj_forward(u.model, u.data)
+    _, r, term, _, info = env.step(np.zeros(15, np.float32))
+    assert term and info["passed"] and _terms_add_up(r, info)
+    assert info["reward_tracking"] <= 1.0
+    assert info["reward_pass"] >= 1.0 / (1.0 - 0.99)
