@@ -475,9 +475,11 @@ def _ppo_rate(env_id: str, args: Args, seed: int) -> float:
     import train_ppo
 
     with tempfile.TemporaryDirectory() as tmp:
+        # The settings this section names (train_ppo's defaults when it was first measured).
         a = train_ppo.Args(
             env_id=env_id, total_steps=args.ppo_steps, n_envs=args.ppo_envs, seed=seed,
-            checkpoint_every=10**9, out=tmp, tensorboard=False,
+            n_steps=512, batch_size=256, normalize_obs=False, checkpoint_every=10**9, out=tmp,
+            tensorboard=False,
         )  # fmt: skip
         return float(train_ppo.train(a)["steps_per_s"])
 
@@ -528,9 +530,10 @@ def part_ppo(args: Args) -> list[str]:
         "",
         f"Command: `python scripts/bench_env.py --part ppo --ppo-steps {args.ppo_steps} "
         f"--ppo-rounds {args.ppo_rounds} --ppo-envs {args.ppo_envs}`. Each round trains a fresh "
-        f"PPO for {args.ppo_steps} env steps on each env in turn with `scripts/train_ppo.py`'s "
-        f"defaults ({args.ppo_envs} env(s), SubprocVecEnv, n_steps 512, batch 256, 10 epochs, "
-        "128x128 networks, torch 1 thread); steps/s is env steps over the wall time of "
+        f"PPO for {args.ppo_steps} env steps on each env in turn with `scripts/train_ppo.py` "
+        f"({args.ppo_envs} env(s), SubprocVecEnv, n_steps 512, batch 256, 10 epochs, "
+        "128x128 networks, no observation normalisation, torch 1 thread); steps/s is env "
+        "steps over the wall time of "
         "`model.learn` (rollouts and updates); medians over the rounds.",
         "",
         "| env | policy | PPO env steps/s | rounds | vs Ant-v5 |",
@@ -541,23 +544,33 @@ def part_ppo(args: Args) -> list[str]:
         f"{', '.join(f'{x:,.0f}' for x in rates['Ant-v5'])} | 1 |",
         "",
     ]
-    if args.train_run:
-        t = json.loads((Path(args.train_run) / "train_summary.json").read_text())
-        a = json.loads((Path(args.train_run) / "args.json").read_text())
+    return lines + trained_policy_lines(args.train_run, args.bench_runs)
+
+
+def trained_policy_lines(train_run: str, bench_runs: tuple[str, ...]) -> list[str]:
+    """The "trained policy" subsection: a train_ppo run's summary and its bench rows."""
+    lines = []
+    if train_run:
+        t = json.loads((Path(train_run) / "train_summary.json").read_text())
+        a = json.loads((Path(train_run) / "args.json").read_text())
+        fails = t.get("fails_this_session")
         lines += [
             "### The trained policy",
             "",
-            f"`{args.train_run}`: {t['total_steps']:,} env steps of `{t['env_id']}` in "
+            f"`{train_run}`: {t['total_steps']:,} env steps of `{t['env_id']}` in "
             f"{t['wall_s'] / 60:.0f} min ({t['steps_per_s']} steps/s, {t['n_envs']} envs, "
             f"{t['vec']}; arguments in `args.json`: seed {a['seed']}, n_steps {a['n_steps']}, "
-            f"batch {a['batch_size']}, lr {a['learning_rate']}, log_std_init {a['log_std_init']}). "
+            f"batch {a['batch_size']}, lr {a['learning_rate']}, log_std_init {a['log_std_init']}, "
+            f"target_kl {a.get('target_kl', 0.0)}, gamma {a['gamma']}, observation "
+            f"normalisation {'on' if a.get('normalize_obs') else 'off'}). "
             f"Outcomes of its training episodes (stochastic actions): "
-            f"{t['outcomes_this_session']}. Evaluated with deterministic actions by "
-            "`neurocog bench --policy MODEL` (trials per row below), beside the avoid reflex "
-            "and the blind CPG:",
+            f"{t['outcomes_this_session']}"
+            + (f", the fails {fails['fell']} fell and {fails['stuck']} stuck" if fails else "")
+            + ". Evaluated with deterministic actions by `neurocog bench --policy MODEL` "
+            "(trials per row below), beside the other controllers:",
             "",
         ]
-    return lines + _bench_rows(args.bench_runs)
+    return lines + _bench_rows(bench_runs)
 
 
 def main(argv: list[str] | None = None) -> None:
