@@ -247,6 +247,52 @@ class _StepClock(gym.Wrapper):
         """Median ms inside ``step`` and between steps (the worker waiting on the vector env)."""
         return float(np.median(self.inside) * 1e3), float(np.median(self.between) * 1e3)
 
+    def samples(self) -> list[float]:
+        """Every recorded time inside ``step``, s, in order."""
+        return list(self.inside)
+
+
+class _Replay(gym.Env):
+    """Stand-in: each step busy-waits for the next of recorded step times; no observation, no info.
+
+    Two of these under ``AsyncVectorEnv`` give the most any env with those step times can gain
+    from Gymnasium's lock-step workers on this machine (the same CPU load per step, none of the
+    env's Dict bookkeeping).
+    """
+
+    def __init__(self, times: list[float], offset: int = 0):
+        self.observation_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (15,), np.float32)
+        self._times = list(times)
+        self._i = offset
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(1, np.float32), {}
+
+    def step(self, action):
+        end = time.perf_counter() + self._times[self._i % len(self._times)]
+        self._i += 1
+        while time.perf_counter() < end:
+            pass
+        return np.zeros(1, np.float32), 0.0, False, False, {}
+
+
+def _replay_rows(times: list[float], n: int) -> tuple[dict, list]:
+    """Timing rows: the replay stand-in alone, and two of it under ``AsyncVectorEnv``."""
+    solo = _Replay(times)
+    zero1 = np.zeros(15, np.float32)
+    pair = gym.vector.AsyncVectorEnv(
+        [lambda: _Replay(times), lambda: _Replay(times, offset=len(times) // 2)]
+    )
+    pair.reset(seed=[0, 1])
+    zero2 = np.zeros((2, 15), np.float32)
+    rows = {
+        "stand-in alone": (lambda: solo.step(zero1), 1, n),
+        "2 stand-ins, AsyncVectorEnv": (lambda: pair.step(zero2), 2, n),
+    }
+    return rows, [pair]
+
 
 class _Tiny(gym.Wrapper):
     """Control: the same env behind a 1-value observation and an empty info."""
@@ -334,9 +380,15 @@ def part_vec(args: Args, one_env: float) -> list[str]:
     for _ in range(args.vec_steps * 2):
         fn()
     clocks = envs.call("clock")
+    times = envs.call("samples")[0]
     envs.close()
     inside = float(np.mean([c[0] for c in clocks]))
     between = float(np.mean([c[1] for c in clocks]))
+    replay_rows, replay_envs = _replay_rows(times, args.vec_steps)
+    replay = _time_rows(replay_rows, args.rounds)
+    for e in replay_envs:
+        e.close()
+    ceiling = replay["2 stand-ins, AsyncVectorEnv"] / replay["stand-in alone"]
     seconds = 5.0
     alone = _solo_rate(seconds)
     with multiprocessing.get_context("fork").Pool(2) as pool:
@@ -368,6 +420,14 @@ def part_vec(args: Args, one_env: float) -> list[str]:
         "cores are there, Gymnasium's Dict bookkeeping is only part of the gap, the rest is the "
         "lock-step itself — each sub-millisecond step waits for the slower worker and a round "
         "trip through the main process.",
+        "",
+        f"Ceiling: a stand-in env that busy-waits, step by step, for the {len(times)} step times "
+        f"recorded in that worker (median {np.median(times) * 1e3:.2f} ms; no observation, no "
+        "info) runs at "
+        f"{replay['stand-in alone']:,.0f} steps/s alone and "
+        f"{replay['2 stand-ins, AsyncVectorEnv']:,.0f} as two under `AsyncVectorEnv` "
+        f"(same rounds): {ceiling:.2f} ×. That is the most Gymnasium's lock-step workers can "
+        "give any env with these step times on this machine, before any of our observation.",
         "",
     ]
     return lines

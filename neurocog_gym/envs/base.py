@@ -21,20 +21,11 @@ from gymnasium.utils import EzPickle
 from neurocog_gym import paths
 from neurocog_gym.locomotion.gait import Gait, default_gait
 from neurocog_gym.locomotion.generator import LocomotionGenerator
-from neurocog_gym.robot.model import RobotIndex
+from neurocog_gym.robot.model import FAULT_WARNINGS, GRAVITY, RobotIndex
 
 N_INTERRUPT = 12
 N_PROVISION = 3
 ACTION_DIM = N_INTERRUPT + N_PROVISION
-_GRAVITY = 9.81
-# MuJoCo warnings that mean the physics can no longer be trusted.
-_FAULT_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQACC,
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_CONTACTFULL,
-    mujoco.mjtWarning.mjWARN_CNSTRFULL,
-)
 
 
 def _check_display(render_mode: str | None) -> None:
@@ -111,7 +102,7 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         self.generator = LocomotionGenerator(
             self.gait, self.robot.joint_lo, self.robot.joint_hi, dt=self.dt
         )
-        self._weight_per_leg = self.robot.mass * _GRAVITY / 4.0
+        self._weight_per_leg = self.robot.mass * GRAVITY / 4.0
         self.action_space = spaces.Box(-1.0, 1.0, shape=(ACTION_DIM,), dtype=np.float32)
         self.observation_space = spaces.Dict(self._observation_spaces())
         self._power = 0.0
@@ -187,7 +178,7 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         self.generator.reset(rng, noise=0.05)
         self.data.ctrl[self.robot.actuator] = self.generator.pools.q_ref
         self._power = 0.0
-        self._warn_stats = [self.data.warning[int(w)] for w in _FAULT_WARNINGS]
+        self._warn_stats = [self.data.warning[int(w)] for w in FAULT_WARNINGS]
         self._warnings_seen = self._warning_count()
         self._reset_task()
         return self._get_obs()

@@ -14,6 +14,17 @@ import numpy as np
 from neurocog_gym import paths
 from neurocog_gym.robot import names
 
+GRAVITY = 9.81
+"""m/s², the scenes' gravity (cost of transport and the per-leg weight of the touch sensors)."""
+FAULT_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQACC,
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_CONTACTFULL,
+    mujoco.mjtWarning.mjWARN_CNSTRFULL,
+)
+"""MuJoCo warnings after which the physics can no longer be trusted (a sim fault)."""
+
 
 @lru_cache(maxsize=4)
 def _model_xml_path(scene: str) -> str:

@@ -45,19 +45,10 @@ import numpy as np
 
 from neurocog_gym.locomotion.gait import Gait, default_gait
 from neurocog_gym.locomotion.generator import _JOINT_NEURONS, LocomotionGenerator
-from neurocog_gym.robot.model import RobotIndex, load_model
+from neurocog_gym.robot.model import FAULT_WARNINGS, GRAVITY, RobotIndex, load_model
 from neurocog_gym.train._eval_kernels import after_step, generator_cycle
 
-_GRAVITY = 9.81
-# MuJoCo warnings that mean the physics can no longer be trusted (as in envs/base.py).
-_FAULT_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQACC,
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_CONTACTFULL,
-    mujoco.mjtWarning.mjWARN_CNSTRFULL,
-)
-_FAULT_INDEX = np.array([int(w) for w in _FAULT_WARNINGS], dtype=np.int64)
+_FAULT_INDEX = np.array([int(w) for w in FAULT_WARNINGS], dtype=np.int64)
 
 
 @dataclass(frozen=True)
@@ -160,7 +151,7 @@ class GaitEvaluator:
             )
         self.dt = self.frame_skip * float(self.model.opt.timestep)
         self.n_steps = int(round(p.seconds / self.dt))
-        self._weight_per_leg = self.robot.mass * _GRAVITY / 4.0
+        self._weight_per_leg = self.robot.mass * GRAVITY / 4.0
 
     def _reset(self, genes: np.ndarray, seed: int) -> LocomotionGenerator:
         """The env's ``reset(seed=seed)`` (``QuadrupedEnv.reset_model``), for these genes."""
@@ -214,7 +205,7 @@ class GaitEvaluator:
             pools.q_hi, pools.dt, np.zeros(12), cpg.y, p.cpg_bound,
         )  # fmt: skip
         warn = d.warning.number
-        n_warn = int(sum(warn[w] for w in _FAULT_WARNINGS))
+        n_warn = int(sum(warn[w] for w in FAULT_WARNINGS))
         check_args = (d.qpos, d.qvel, d.actuator_force, d.xmat, warn, _FAULT_INDEX)
         check_tail = (r.actuator, r.dof_adr, r.torso_body)
         dt, nstep = self.dt, self.frame_skip
@@ -259,7 +250,7 @@ class GaitEvaluator:
         distance = float(xs[n_done] - xs[start])
         energy = float(power[start:n_done].sum() * dt)
         speed = distance / window
-        cot = energy / (r.mass * _GRAVITY * max(distance, p.min_speed * window))
+        cot = energy / (r.mass * GRAVITY * max(distance, p.min_speed * window))
         lost = 0.0 if fell_at is None else 1.0 - fell_at / (self.n_steps * dt)
         lateral = float(ys[n_done] - ys[start])
         drift10 = 10.0 * abs(lateral) / max(distance, p.min_speed * window)
