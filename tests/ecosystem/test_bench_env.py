@@ -22,7 +22,8 @@ def test_env_part_writes_every_row(tmp_path):
     for row in ("full perception, default settings", "`Ant-v5`, random actions",
                 "154,112 rays a frame", "'async')", "'sync')", "load average",
                 "ToF sensing", "**whole step**", "| pinned + FlattenObservation |",
-                "two independent processes", "inside `env.step`"):  # fmt: skip
+                "two independent processes", "inside `env.step`",
+                "Ceiling: a stand-in env"):  # fmt: skip
         assert row in text
 
 
@@ -33,3 +34,22 @@ def test_bad_arguments_exit_2():
     r = subprocess.run([sys.executable, str(SCRIPT), "--rounds", "0"], capture_output=True,
                        text=True, timeout=120)  # fmt: skip
     assert r.returncode == 2 and "counts" in r.stderr
+
+
+def test_replay_stand_in_busy_waits_the_recorded_times():
+    sys.path.insert(0, str(SCRIPT.parent))
+    import time
+
+    import bench_env
+
+    env = bench_env._Replay([0.002, 0.004], offset=1)
+    obs, info = env.reset(seed=0)
+    assert obs.shape == (1,) and info == {}
+    took = []
+    for _ in range(4):
+        t0 = time.perf_counter()
+        _, reward, term, trunc, info = env.step(env.action_space.sample())
+        took.append(time.perf_counter() - t0)
+        assert (reward, term, trunc, info) == (0.0, False, False, {})
+    # offset 1 starts with the second time, then cycles: 4, 2, 4, 2 ms (never shorter)
+    assert took[0] >= 0.004 and took[1] >= 0.002 and took[2] >= 0.004 and took[3] >= 0.002
