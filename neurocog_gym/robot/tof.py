@@ -663,7 +663,10 @@ def _bound_radius(gtype, s0, s1, s2):  # pragma: no cover - compiled
     return math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
 
 
-_T_TYPE, _T_RB, _T_SIZE, _T_POS, _T_MAT, _T_LEN = 0, 1, 2, 5, 8, 17  # columns of the geom table
+# Columns of the geom table: type, bounding radius, size, sensor minus geom position e, mat, the
+# ray origin in the geom frame (mat^T e) and the bounding-sphere term e·e - rb² (both the same
+# for every ray of a sensor, so computed once per sensor and geom).
+_T_TYPE, _T_RB, _T_SIZE, _T_E, _T_MAT, _T_LP, _T_C, _T_LEN = 0, 1, 2, 5, 8, 17, 20, 21
 
 
 @njit(cache=True)
@@ -709,7 +712,7 @@ def _cast_primitives(
         geom_xpos: (ngeom, 3) float64, ``data.geom_xpos``.
         geom_xmat: (ngeom, 9) float64, ``data.geom_xmat``.
         max_range: metres, cull distance.
-        table: (G, 17) float64, scratch: type, bounding radius, size, pos, mat of kept geoms.
+        table: (G, 21) float64, scratch: the kept geoms' columns ``_T_*``.
         table_id: (G,) int32, scratch: their ids.
         dist: (S, n) float64, metres, written: ray length to the nearest hit, -1 if none.
         geomid: (S, n) int32, written: geom hit, -1 if none.
@@ -746,9 +749,19 @@ def _cast_primitives(
             table[na, _T_RB] = rb
             for j in range(3):
                 table[na, _T_SIZE + j] = geom_size[g, j]
-                table[na, _T_POS + j] = geom_xpos[g, j]
+            e0 = o0 - geom_xpos[g, 0]
+            e1 = o1 - geom_xpos[g, 1]
+            e2 = o2 - geom_xpos[g, 2]
+            table[na, _T_E] = e0
+            table[na, _T_E + 1] = e1
+            table[na, _T_E + 2] = e2
             for j in range(9):
                 table[na, _T_MAT + j] = geom_xmat[g, j]
+            x = geom_xmat[g]
+            table[na, _T_LP] = x[0] * e0 + x[3] * e1 + x[6] * e2
+            table[na, _T_LP + 1] = x[1] * e0 + x[4] * e1 + x[7] * e2
+            table[na, _T_LP + 2] = x[2] * e0 + x[5] * e1 + x[8] * e2
+            table[na, _T_C] = e0 * e0 + e1 * e1 + e2 * e2 - rb * rb
             table_id[na] = g
             na += 1
         for k in range(dirs.shape[0]):
@@ -760,13 +773,9 @@ def _cast_primitives(
             best_g = -1
             for a in range(na):
                 gt = int(table[a, _T_TYPE])
-                e0 = o0 - table[a, _T_POS]
-                e1 = o1 - table[a, _T_POS + 1]
-                e2 = o2 - table[a, _T_POS + 2]
                 if gt != _PLANE:
-                    rb = table[a, _T_RB]
-                    b = vx * e0 + vy * e1 + vz * e2
-                    c = e0 * e0 + e1 * e1 + e2 * e2 - rb * rb
+                    b = vx * table[a, _T_E] + vy * table[a, _T_E + 1] + vz * table[a, _T_E + 2]
+                    c = table[a, _T_C]
                     if c > 0.0:
                         disc = b * b - c
                         if b > 0.0 or disc < 0.0:
@@ -781,9 +790,9 @@ def _cast_primitives(
                     table[a, _T_SIZE],
                     table[a, _T_SIZE + 1],
                     table[a, _T_SIZE + 2],
-                    x0 * e0 + x3 * e1 + x6 * e2,
-                    x1 * e0 + x4 * e1 + x7 * e2,
-                    x2 * e0 + x5 * e1 + x8 * e2,
+                    table[a, _T_LP],
+                    table[a, _T_LP + 1],
+                    table[a, _T_LP + 2],
                     x0 * vx + x3 * vy + x6 * vz,
                     x1 * vx + x4 * vy + x7 * vz,
                     x2 * vx + x5 * vy + x8 * vz,
