@@ -240,6 +240,7 @@ def main(argv: list[str] | None = None) -> int:
                 4.0,
                 fast._table,
                 fast._table_id,
+                fast._vec,
                 fast._dist,
                 fast._geomid,
             ),  # fmt: skip

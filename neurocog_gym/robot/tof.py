@@ -246,7 +246,7 @@ class ToFArray:
 
         s, n = p.n_sensors, p.width * p.height
         self._n = n
-        self._vec = np.zeros((s, n, 3))  # world-frame rays for mj_multiRay
+        self._vec = np.zeros((s, n, 3))  # world-frame rays
         self._dist = np.zeros((s, n))
         self._geomid = np.zeros((s, n), dtype=np.int32)
         self._gauss = np.zeros((s, n))
@@ -377,6 +377,7 @@ class ToFArray:
                 p.max_range,
                 self._table,
                 self._table_id,
+                self._vec,
                 self._dist,
                 self._geomid,
             )
@@ -669,6 +670,47 @@ def _bound_radius(gtype, s0, s1, s2):  # pragma: no cover - compiled
 _T_TYPE, _T_RB, _T_SIZE, _T_E, _T_MAT, _T_LP, _T_C, _T_LEN = 0, 1, 2, 5, 8, 17, 20, 21
 
 
+@njit(cache=True, error_model="numpy")
+def _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, x, dist, geomid):  # pragma: no cover - compiled
+    """Take the hits of sensor ``s``'s rays on plane geom ``g`` where they are the nearest yet.
+
+    The plane branch of :func:`_ray_geom` for every ray of one sensor, written without early
+    returns and with NumPy's error model (no zero-divisor check), so that LLVM vectorises it.
+
+    Args:
+        vec: (S, n, 3) float64, unit rays in the world frame.
+        s: sensor index.
+        g: geom id.
+        s0: ``geom_size[g, 0]``, metres (half size along x; <= 0 is infinite).
+        s1: ``geom_size[g, 1]``, metres (half size along y; <= 0 is infinite).
+        lp0: sensor position x in the geom frame, metres.
+        lp1: sensor position y in the geom frame, metres.
+        lp2: sensor position z in the geom frame, metres.
+        x: (9,) float64, the geom's orientation (``geom_xmat[g]``).
+        dist: (S, n) float64, metres, ray lengths to the nearest hit so far (-1: none); updated.
+        geomid: (S, n) int32, geom of that hit (-1: none); updated.
+    """
+    x0, x1, x2, x3, x4, x5, x6, x7, x8 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]
+    for k in range(vec.shape[1]):
+        vx = vec[s, k, 0]
+        vy = vec[s, k, 1]
+        vz = vec[s, k, 2]
+        lv0 = x0 * vx + x3 * vy + x6 * vz
+        lv1 = x1 * vx + x4 * vy + x7 * vz
+        lv2 = x2 * vx + x5 * vy + x8 * vz
+        t = -lp2 / lv2
+        best = dist[s, k]
+        if (
+            not (lv2 > -_MINVAL)
+            and t >= 0.0
+            and (s0 <= 0.0 or abs(lp0 + t * lv0) <= s0)
+            and (s1 <= 0.0 or abs(lp1 + t * lv1) <= s1)
+            and (best < 0.0 or t < best)
+        ):
+            dist[s, k] = t
+            geomid[s, k] = g
+
+
 @njit(cache=True)
 def _cast_primitives(
     dirs,
@@ -687,6 +729,7 @@ def _cast_primitives(
     max_range,
     table,
     table_id,
+    vec,
     dist,
     geomid,
 ):  # pragma: no cover - compiled
@@ -696,6 +739,9 @@ def _cast_primitives(
     material) alpha is 0 are skipped; the geom-group mask is already applied in ``cand``.
     Geoms whose bounding sphere lies beyond ``max_range`` or outside the sensor's view cone are
     culled once per sensor; each remaining non-plane geom gets a bounding-sphere test per ray.
+    Geoms are the outer loop and rays the inner one (each ray still meets the geoms in the
+    same order, so ties go the same way): a plane is then one vectorised pass
+    (:func:`_cast_plane`).
 
     Args:
         dirs: (n, 3) float64, unit rays in the site frame.
@@ -714,16 +760,16 @@ def _cast_primitives(
         max_range: metres, cull distance.
         table: (G, 21) float64, scratch: the kept geoms' columns ``_T_*``.
         table_id: (G,) int32, scratch: their ids.
+        vec: (S, n, 3) float64, scratch: the rays in the world frame.
         dist: (S, n) float64, metres, written: ray length to the nearest hit, -1 if none.
         geomid: (S, n) int32, written: geom hit, -1 if none.
     """
     cone_sin = math.sqrt(max(0.0, 1.0 - cone_cos * cone_cos))
+    _rotate_rays(dirs, site_xmat, site_ids, vec)
     for s in range(site_ids.shape[0]):
         i = site_ids[s]
         o0, o1, o2 = site_xpos[i, 0], site_xpos[i, 1], site_xpos[i, 2]
-        r0, r1, r2 = site_xmat[i, 0], site_xmat[i, 1], site_xmat[i, 2]
-        r3, r4, r5 = site_xmat[i, 3], site_xmat[i, 4], site_xmat[i, 5]
-        r6, r7, r8 = site_xmat[i, 6], site_xmat[i, 7], site_xmat[i, 8]
+        r0, r3, r6 = site_xmat[i, 0], site_xmat[i, 3], site_xmat[i, 6]
         na = 0
         for gi in range(cand.shape[0]):
             g = cand[gi]
@@ -765,40 +811,39 @@ def _cast_primitives(
             table_id[na] = g
             na += 1
         for k in range(dirs.shape[0]):
-            d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-            vx = r0 * d0 + r1 * d1 + r2 * d2
-            vy = r3 * d0 + r4 * d1 + r5 * d2
-            vz = r6 * d0 + r7 * d1 + r8 * d2
-            best = -1.0
-            best_g = -1
-            for a in range(na):
-                gt = int(table[a, _T_TYPE])
-                if gt != _PLANE:
-                    b = vx * table[a, _T_E] + vy * table[a, _T_E + 1] + vz * table[a, _T_E + 2]
-                    c = table[a, _T_C]
-                    if c > 0.0:
-                        disc = b * b - c
-                        if b > 0.0 or disc < 0.0:
-                            continue  # misses the bounding sphere, or it lies behind
-                        if best >= 0.0 and -b - math.sqrt(disc) > best:
-                            continue  # bounding sphere wholly beyond the nearest hit so far
-                x0, x1, x2 = table[a, _T_MAT], table[a, _T_MAT + 1], table[a, _T_MAT + 2]
-                x3, x4, x5 = table[a, _T_MAT + 3], table[a, _T_MAT + 4], table[a, _T_MAT + 5]
-                x6, x7, x8 = table[a, _T_MAT + 6], table[a, _T_MAT + 7], table[a, _T_MAT + 8]
+            dist[s, k] = -1.0
+            geomid[s, k] = -1
+        for a in range(na):
+            gt = int(table[a, _T_TYPE])
+            g = table_id[a]
+            s0, s1, s2 = table[a, _T_SIZE], table[a, _T_SIZE + 1], table[a, _T_SIZE + 2]
+            e0, e1, e2 = table[a, _T_E], table[a, _T_E + 1], table[a, _T_E + 2]
+            lp0, lp1, lp2 = table[a, _T_LP], table[a, _T_LP + 1], table[a, _T_LP + 2]
+            if gt == _PLANE:
+                _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, table[a, _T_MAT:_T_LP], dist, geomid)
+                continue
+            c = table[a, _T_C]
+            x0, x1, x2 = table[a, _T_MAT], table[a, _T_MAT + 1], table[a, _T_MAT + 2]
+            x3, x4, x5 = table[a, _T_MAT + 3], table[a, _T_MAT + 4], table[a, _T_MAT + 5]
+            x6, x7, x8 = table[a, _T_MAT + 6], table[a, _T_MAT + 7], table[a, _T_MAT + 8]
+            for k in range(dirs.shape[0]):
+                vx = vec[s, k, 0]
+                vy = vec[s, k, 1]
+                vz = vec[s, k, 2]
+                best = dist[s, k]
+                b = vx * e0 + vy * e1 + vz * e2
+                if c > 0.0:
+                    disc = b * b - c
+                    if b > 0.0 or disc < 0.0:
+                        continue  # misses the bounding sphere, or it lies behind
+                    if best >= 0.0 and -b - math.sqrt(disc) > best:
+                        continue  # bounding sphere wholly beyond the nearest hit so far
                 t = _ray_geom(
-                    gt,
-                    table[a, _T_SIZE],
-                    table[a, _T_SIZE + 1],
-                    table[a, _T_SIZE + 2],
-                    table[a, _T_LP],
-                    table[a, _T_LP + 1],
-                    table[a, _T_LP + 2],
+                    gt, s0, s1, s2, lp0, lp1, lp2,
                     x0 * vx + x3 * vy + x6 * vz,
                     x1 * vx + x4 * vy + x7 * vz,
                     x2 * vx + x5 * vy + x8 * vz,
-                )
+                )  # fmt: skip
                 if t >= 0.0 and (best < 0.0 or t < best):
-                    best = t
-                    best_g = table_id[a]
-            dist[s, k] = best
-            geomid[s, k] = best_g
+                    dist[s, k] = t
+                    geomid[s, k] = g
