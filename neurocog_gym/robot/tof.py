@@ -243,10 +243,13 @@ class ToFArray:
         self._dirs = np.ascontiguousarray(dirs)
         self._dirs.flags.writeable = False
         self._cos_axis = np.ascontiguousarray(self._dirs[:, 0])
+        # The same rays as three rows (x, y, z), for loops that LLVM vectorises.
+        self._dirs_t = np.ascontiguousarray(self._dirs.T)
+        self._dirs_t.flags.writeable = False
 
         s, n = p.n_sensors, p.width * p.height
         self._n = n
-        self._vec = np.zeros((s, n, 3))  # world-frame rays
+        self._vec = np.zeros((s, 3, n))  # world-frame rays, a row per axis
         self._dist = np.zeros((s, n))
         self._geomid = np.zeros((s, n), dtype=np.int32)
         self._gauss = np.zeros((s, n))
@@ -341,15 +344,13 @@ class ToFArray:
         p = self.params
         m = self.model
         if p.backend == "mujoco":
-            _rotate_rays(self._dirs, data.site_xmat, self.site_ids, self._vec)
+            _rotate_rays(self._dirs_t, data.site_xmat, self.site_ids, self._vec)
             for i, sid in enumerate(self.site_ids):
                 mujoco.mj_multiRay(
                     m,
                     data,
                     data.site_xpos[sid],
-                    self._vec[i].reshape(
-                        -1
-                    ),  # made per call: a stored view would part from _vec on pickling
+                    self._vec[i].T.reshape(-1),  # (n, 3) rows, as mj_multiRay reads them
                     self._geomgroup,
                     1,
                     -1,
@@ -361,7 +362,7 @@ class ToFArray:
                 )
         else:
             _cast_primitives(
-                self._dirs,
+                self._dirs_t,
                 self._cone_cos,
                 data.site_xpos,
                 data.site_xmat,
@@ -385,10 +386,9 @@ class ToFArray:
             self._rng.standard_normal(out=self._gauss)
             self._rng.random(out=self._unif)
         total = _pack(
-            self._dirs,
+            self._vec,
             self._cos_axis,
             data.site_xpos,
-            data.site_xmat,
             self.site_ids,
             self._dist,
             self._geomid,
@@ -425,33 +425,35 @@ class ToFArray:
 
 
 @njit(cache=True)
-def _rotate_rays(dirs, site_xmat, site_ids, out):  # pragma: no cover - compiled
-    """Rotate site-frame rays into the world: ``out[s, k] = R_s @ dirs[k]``.
+def _rotate_rays(dirs_t, site_xmat, site_ids, out):  # pragma: no cover - compiled
+    """Rotate site-frame rays into the world: ``out[s, :, k] = R_s @ dirs_t[:, k]``.
+
+    Rays are stored a row per axis (x, y, z), so that this loop and the casts' loops over the
+    rays vectorise (strided rows of three keep them scalar).
 
     Args:
-        dirs: (n, 3) float64, unit rays in the site frame.
+        dirs_t: (3, n) float64, unit rays in the site frame, a row per axis.
         site_xmat: (nsite, 9) float64, row-major site orientations (``data.site_xmat``).
         site_ids: (S,) int64, the sensors' site ids.
-        out: (S, n, 3) float64, written.
+        out: (S, 3, n) float64, written.
     """
     for s in range(site_ids.shape[0]):
         i = site_ids[s]
         r0, r1, r2 = site_xmat[i, 0], site_xmat[i, 1], site_xmat[i, 2]
         r3, r4, r5 = site_xmat[i, 3], site_xmat[i, 4], site_xmat[i, 5]
         r6, r7, r8 = site_xmat[i, 6], site_xmat[i, 7], site_xmat[i, 8]
-        for k in range(dirs.shape[0]):
-            d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-            out[s, k, 0] = r0 * d0 + r1 * d1 + r2 * d2
-            out[s, k, 1] = r3 * d0 + r4 * d1 + r5 * d2
-            out[s, k, 2] = r6 * d0 + r7 * d1 + r8 * d2
+        for k in range(dirs_t.shape[1]):
+            d0, d1, d2 = dirs_t[0, k], dirs_t[1, k], dirs_t[2, k]
+            out[s, 0, k] = r0 * d0 + r1 * d1 + r2 * d2
+            out[s, 1, k] = r3 * d0 + r4 * d1 + r5 * d2
+            out[s, 2, k] = r6 * d0 + r7 * d1 + r8 * d2
 
 
 @njit(cache=True)
 def _pack(
-    dirs,
+    vec,
     cos_axis,
     site_xpos,
-    site_xmat,
     site_ids,
     dist,
     geomid,
@@ -470,10 +472,9 @@ def _pack(
     """Apply noise and the range gate, write depth, validity and packed world points.
 
     Args:
-        dirs: (n, 3) float64, unit rays in the site frame.
+        vec: (S, 3, n) float64, unit rays in the world frame (:func:`_rotate_rays`).
         cos_axis: (n,) float64, cosine of each ray to the optical axis (z-depth = d · cos).
         site_xpos: (nsite, 3) float64, metres, site positions (``data.site_xpos``).
-        site_xmat: (nsite, 9) float64, site orientations (``data.site_xmat``).
         site_ids: (S,) int64, the sensors' site ids.
         dist: (S, n) float64, metres, ray length to the hit, < 0 for none.
         geomid: (S, n) int32, geom hit; set to -1 where the pixel ends up invalid.
@@ -498,12 +499,9 @@ def _pack(
     for s in range(site_ids.shape[0]):
         i = site_ids[s]
         o0, o1, o2 = site_xpos[i, 0], site_xpos[i, 1], site_xpos[i, 2]
-        r0, r1, r2 = site_xmat[i, 0], site_xmat[i, 1], site_xmat[i, 2]
-        r3, r4, r5 = site_xmat[i, 3], site_xmat[i, 4], site_xmat[i, 5]
-        r6, r7, r8 = site_xmat[i, 6], site_xmat[i, 7], site_xmat[i, 8]
         origins[s, 0], origins[s, 1], origins[s, 2] = o0, o1, o2
         start = total
-        for k in range(dirs.shape[0]):
+        for k in range(vec.shape[2]):
             d = dist[s, k]
             ok = d >= 0.0
             if ok and noisy:
@@ -518,10 +516,9 @@ def _pack(
                 geomid[s, k] = -1
                 continue
             depth[s, k] = d * cos_axis[k]
-            d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-            points[total, 0] = o0 + d * (r0 * d0 + r1 * d1 + r2 * d2)
-            points[total, 1] = o1 + d * (r3 * d0 + r4 * d1 + r5 * d2)
-            points[total, 2] = o2 + d * (r6 * d0 + r7 * d1 + r8 * d2)
+            points[total, 0] = o0 + d * vec[s, 0, k]
+            points[total, 1] = o1 + d * vec[s, 1, k]
+            points[total, 2] = o2 + d * vec[s, 2, k]
             total += 1
         counts[s] = total - start
     return total
@@ -678,7 +675,7 @@ def _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, x, dist, geomid):  # pragma: n
     returns and with NumPy's error model (no zero-divisor check), so that LLVM vectorises it.
 
     Args:
-        vec: (S, n, 3) float64, unit rays in the world frame.
+        vec: (S, 3, n) float64, unit rays in the world frame, a row per axis.
         s: sensor index.
         g: geom id.
         s0: ``geom_size[g, 0]``, metres (half size along x; <= 0 is infinite).
@@ -691,10 +688,10 @@ def _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, x, dist, geomid):  # pragma: n
         geomid: (S, n) int32, geom of that hit (-1: none); updated.
     """
     x0, x1, x2, x3, x4, x5, x6, x7, x8 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]
-    for k in range(vec.shape[1]):
-        vx = vec[s, k, 0]
-        vy = vec[s, k, 1]
-        vz = vec[s, k, 2]
+    for k in range(vec.shape[2]):
+        vx = vec[s, 0, k]
+        vy = vec[s, 1, k]
+        vz = vec[s, 2, k]
         lv0 = x0 * vx + x3 * vy + x6 * vz
         lv1 = x1 * vx + x4 * vy + x7 * vz
         lv2 = x2 * vx + x5 * vy + x8 * vz
@@ -713,7 +710,7 @@ def _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, x, dist, geomid):  # pragma: n
 
 @njit(cache=True)
 def _cast_primitives(
-    dirs,
+    dirs_t,
     cone_cos,
     site_xpos,
     site_xmat,
@@ -744,7 +741,7 @@ def _cast_primitives(
     (:func:`_cast_plane`).
 
     Args:
-        dirs: (n, 3) float64, unit rays in the site frame.
+        dirs_t: (3, n) float64, unit rays in the site frame, a row per axis.
         cone_cos: cosine of the half-angle of the cone around +x that holds all rays.
         site_xpos: (nsite, 3) float64, ``data.site_xpos``.
         site_xmat: (nsite, 9) float64, ``data.site_xmat``.
@@ -760,12 +757,12 @@ def _cast_primitives(
         max_range: metres, cull distance.
         table: (G, 21) float64, scratch: the kept geoms' columns ``_T_*``.
         table_id: (G,) int32, scratch: their ids.
-        vec: (S, n, 3) float64, scratch: the rays in the world frame.
+        vec: (S, 3, n) float64, written: the rays in the world frame (:func:`_rotate_rays`).
         dist: (S, n) float64, metres, written: ray length to the nearest hit, -1 if none.
         geomid: (S, n) int32, written: geom hit, -1 if none.
     """
     cone_sin = math.sqrt(max(0.0, 1.0 - cone_cos * cone_cos))
-    _rotate_rays(dirs, site_xmat, site_ids, vec)
+    _rotate_rays(dirs_t, site_xmat, site_ids, vec)
     for s in range(site_ids.shape[0]):
         i = site_ids[s]
         o0, o1, o2 = site_xpos[i, 0], site_xpos[i, 1], site_xpos[i, 2]
@@ -810,7 +807,7 @@ def _cast_primitives(
             table[na, _T_C] = e0 * e0 + e1 * e1 + e2 * e2 - rb * rb
             table_id[na] = g
             na += 1
-        for k in range(dirs.shape[0]):
+        for k in range(dirs_t.shape[1]):
             dist[s, k] = -1.0
             geomid[s, k] = -1
         for a in range(na):
@@ -826,10 +823,10 @@ def _cast_primitives(
             x0, x1, x2 = table[a, _T_MAT], table[a, _T_MAT + 1], table[a, _T_MAT + 2]
             x3, x4, x5 = table[a, _T_MAT + 3], table[a, _T_MAT + 4], table[a, _T_MAT + 5]
             x6, x7, x8 = table[a, _T_MAT + 6], table[a, _T_MAT + 7], table[a, _T_MAT + 8]
-            for k in range(dirs.shape[0]):
-                vx = vec[s, k, 0]
-                vy = vec[s, k, 1]
-                vz = vec[s, k, 2]
+            for k in range(dirs_t.shape[1]):
+                vx = vec[s, 0, k]
+                vy = vec[s, 1, k]
+                vz = vec[s, 2, k]
                 best = dist[s, k]
                 b = vx * e0 + vy * e1 + vz * e2
                 if c > 0.0:
