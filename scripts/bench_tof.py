@@ -167,14 +167,14 @@ def main(argv: list[str] | None = None) -> int:
     nr = max(1, n // 4)
     timer.add(
         "rotate",
-        lambda: tof_mod._rotate_rays(full._dirs, data.site_xmat, full.site_ids, full._vec),
+        lambda: tof_mod._rotate_rays(full._dirs_t, data.site_xmat, full.site_ids, full._vec),
         n,
     )
 
     def cast_all(tof=full, geomgroup=RAY_GEOM_GROUPS, cutoff=4.0, mdl=model, dat=data):
         for i, sid in enumerate(tof.site_ids):
             mujoco.mj_multiRay(
-                mdl, dat, dat.site_xpos[sid], tof._vec[i].reshape(-1), geomgroup, 1, -1,
+                mdl, dat, dat.site_xpos[sid], tof._vec[i].T.reshape(-1), geomgroup, 1, -1,
                 tof._geomid[i], tof._dist[i], None, tof._n, cutoff,
             )  # fmt: skip
 
@@ -184,10 +184,9 @@ def main(argv: list[str] | None = None) -> int:
     timer.add(
         "pack",
         lambda: tof_mod._pack(
-            full._dirs,
+            full._vec,
             full._cos_axis,
             data.site_xpos,
-            data.site_xmat,
             full.site_ids,
             full._dist,
             full._geomid,
@@ -224,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
         timer.add(
             "numba_cast",
             lambda: tof_mod._cast_primitives(
-                fast._dirs,
+                fast._dirs_t,
                 fast._cone_cos,
                 data.site_xpos,
                 data.site_xmat,
@@ -240,6 +239,7 @@ def main(argv: list[str] | None = None) -> int:
                 4.0,
                 fast._table,
                 fast._table_id,
+                fast._vec,
                 fast._dist,
                 fast._geomid,
             ),  # fmt: skip

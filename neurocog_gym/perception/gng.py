@@ -291,6 +291,14 @@ class DDGNG:
             self.seed = int(seed)
         self._net = _Net(self.params, _seed_state(self.seed))
         self._V = np.zeros((self.params.lam, 3))
+        m = self.params.max_nodes
+        # Read-out scratch, written by every export; the graph properties return copies of the
+        # written rows (a fresh full-size buffer per cycle costs more than the copies).
+        self._out = (
+            np.zeros((m, 3)),
+            np.zeros((m * self.params.max_degree // 2, 2), np.int64),
+            np.zeros(m),
+        )
         self._cache = None
 
     def update(self, points, attention_boxes=None) -> int:
@@ -337,9 +345,9 @@ class DDGNG:
     def _graph(self):
         if self._cache is None:
             net = self._net
-            m = self.params.max_nodes
-            out_n, out_e, out_s, n, ne = net.export(m, m * self.params.max_degree // 2)
-            nodes, edges, strength = out_n[:n], out_e[:ne], out_s[:n]
+            out_n, out_e, out_s = self._out
+            n, ne = K.export_graph(net.pos, net.fnode, net.inode, net.adj, out_n, out_e, out_s)
+            nodes, edges, strength = out_n[:n].copy(), out_e[:ne].copy(), out_s[:n].copy()
             for a in (nodes, edges, strength):
                 a.flags.writeable = False
             self._cache = (nodes, edges, strength)

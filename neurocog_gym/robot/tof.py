@@ -243,10 +243,13 @@ class ToFArray:
         self._dirs = np.ascontiguousarray(dirs)
         self._dirs.flags.writeable = False
         self._cos_axis = np.ascontiguousarray(self._dirs[:, 0])
+        # The same rays as three rows (x, y, z), for loops that LLVM vectorises.
+        self._dirs_t = np.ascontiguousarray(self._dirs.T)
+        self._dirs_t.flags.writeable = False
 
         s, n = p.n_sensors, p.width * p.height
         self._n = n
-        self._vec = np.zeros((s, n, 3))  # world-frame rays for mj_multiRay
+        self._vec = np.zeros((s, 3, n))  # world-frame rays, a row per axis
         self._dist = np.zeros((s, n))
         self._geomid = np.zeros((s, n), dtype=np.int32)
         self._gauss = np.zeros((s, n))
@@ -341,15 +344,13 @@ class ToFArray:
         p = self.params
         m = self.model
         if p.backend == "mujoco":
-            _rotate_rays(self._dirs, data.site_xmat, self.site_ids, self._vec)
+            _rotate_rays(self._dirs_t, data.site_xmat, self.site_ids, self._vec)
             for i, sid in enumerate(self.site_ids):
                 mujoco.mj_multiRay(
                     m,
                     data,
                     data.site_xpos[sid],
-                    self._vec[i].reshape(
-                        -1
-                    ),  # made per call: a stored view would part from _vec on pickling
+                    self._vec[i].T.reshape(-1),  # (n, 3) rows, as mj_multiRay reads them
                     self._geomgroup,
                     1,
                     -1,
@@ -361,7 +362,7 @@ class ToFArray:
                 )
         else:
             _cast_primitives(
-                self._dirs,
+                self._dirs_t,
                 self._cone_cos,
                 data.site_xpos,
                 data.site_xmat,
@@ -377,6 +378,7 @@ class ToFArray:
                 p.max_range,
                 self._table,
                 self._table_id,
+                self._vec,
                 self._dist,
                 self._geomid,
             )
@@ -384,10 +386,9 @@ class ToFArray:
             self._rng.standard_normal(out=self._gauss)
             self._rng.random(out=self._unif)
         total = _pack(
-            self._dirs,
+            self._vec,
             self._cos_axis,
             data.site_xpos,
-            data.site_xmat,
             self.site_ids,
             self._dist,
             self._geomid,
@@ -424,33 +425,35 @@ class ToFArray:
 
 
 @njit(cache=True)
-def _rotate_rays(dirs, site_xmat, site_ids, out):  # pragma: no cover - compiled
-    """Rotate site-frame rays into the world: ``out[s, k] = R_s @ dirs[k]``.
+def _rotate_rays(dirs_t, site_xmat, site_ids, out):  # pragma: no cover - compiled
+    """Rotate site-frame rays into the world: ``out[s, :, k] = R_s @ dirs_t[:, k]``.
+
+    Rays are stored a row per axis (x, y, z), so that this loop and the casts' loops over the
+    rays vectorise (strided rows of three keep them scalar).
 
     Args:
-        dirs: (n, 3) float64, unit rays in the site frame.
+        dirs_t: (3, n) float64, unit rays in the site frame, a row per axis.
         site_xmat: (nsite, 9) float64, row-major site orientations (``data.site_xmat``).
         site_ids: (S,) int64, the sensors' site ids.
-        out: (S, n, 3) float64, written.
+        out: (S, 3, n) float64, written.
     """
     for s in range(site_ids.shape[0]):
         i = site_ids[s]
         r0, r1, r2 = site_xmat[i, 0], site_xmat[i, 1], site_xmat[i, 2]
         r3, r4, r5 = site_xmat[i, 3], site_xmat[i, 4], site_xmat[i, 5]
         r6, r7, r8 = site_xmat[i, 6], site_xmat[i, 7], site_xmat[i, 8]
-        for k in range(dirs.shape[0]):
-            d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-            out[s, k, 0] = r0 * d0 + r1 * d1 + r2 * d2
-            out[s, k, 1] = r3 * d0 + r4 * d1 + r5 * d2
-            out[s, k, 2] = r6 * d0 + r7 * d1 + r8 * d2
+        for k in range(dirs_t.shape[1]):
+            d0, d1, d2 = dirs_t[0, k], dirs_t[1, k], dirs_t[2, k]
+            out[s, 0, k] = r0 * d0 + r1 * d1 + r2 * d2
+            out[s, 1, k] = r3 * d0 + r4 * d1 + r5 * d2
+            out[s, 2, k] = r6 * d0 + r7 * d1 + r8 * d2
 
 
 @njit(cache=True)
 def _pack(
-    dirs,
+    vec,
     cos_axis,
     site_xpos,
-    site_xmat,
     site_ids,
     dist,
     geomid,
@@ -469,10 +472,9 @@ def _pack(
     """Apply noise and the range gate, write depth, validity and packed world points.
 
     Args:
-        dirs: (n, 3) float64, unit rays in the site frame.
+        vec: (S, 3, n) float64, unit rays in the world frame (:func:`_rotate_rays`).
         cos_axis: (n,) float64, cosine of each ray to the optical axis (z-depth = d · cos).
         site_xpos: (nsite, 3) float64, metres, site positions (``data.site_xpos``).
-        site_xmat: (nsite, 9) float64, site orientations (``data.site_xmat``).
         site_ids: (S,) int64, the sensors' site ids.
         dist: (S, n) float64, metres, ray length to the hit, < 0 for none.
         geomid: (S, n) int32, geom hit; set to -1 where the pixel ends up invalid.
@@ -497,12 +499,9 @@ def _pack(
     for s in range(site_ids.shape[0]):
         i = site_ids[s]
         o0, o1, o2 = site_xpos[i, 0], site_xpos[i, 1], site_xpos[i, 2]
-        r0, r1, r2 = site_xmat[i, 0], site_xmat[i, 1], site_xmat[i, 2]
-        r3, r4, r5 = site_xmat[i, 3], site_xmat[i, 4], site_xmat[i, 5]
-        r6, r7, r8 = site_xmat[i, 6], site_xmat[i, 7], site_xmat[i, 8]
         origins[s, 0], origins[s, 1], origins[s, 2] = o0, o1, o2
         start = total
-        for k in range(dirs.shape[0]):
+        for k in range(vec.shape[2]):
             d = dist[s, k]
             ok = d >= 0.0
             if ok and noisy:
@@ -517,10 +516,9 @@ def _pack(
                 geomid[s, k] = -1
                 continue
             depth[s, k] = d * cos_axis[k]
-            d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-            points[total, 0] = o0 + d * (r0 * d0 + r1 * d1 + r2 * d2)
-            points[total, 1] = o1 + d * (r3 * d0 + r4 * d1 + r5 * d2)
-            points[total, 2] = o2 + d * (r6 * d0 + r7 * d1 + r8 * d2)
+            points[total, 0] = o0 + d * vec[s, 0, k]
+            points[total, 1] = o1 + d * vec[s, 1, k]
+            points[total, 2] = o2 + d * vec[s, 2, k]
             total += 1
         counts[s] = total - start
     return total
@@ -663,12 +661,56 @@ def _bound_radius(gtype, s0, s1, s2):  # pragma: no cover - compiled
     return math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
 
 
-_T_TYPE, _T_RB, _T_SIZE, _T_POS, _T_MAT, _T_LEN = 0, 1, 2, 5, 8, 17  # columns of the geom table
+# Columns of the geom table: type, bounding radius, size, sensor minus geom position e, mat, the
+# ray origin in the geom frame (mat^T e) and the bounding-sphere term e·e - rb² (both the same
+# for every ray of a sensor, so computed once per sensor and geom).
+_T_TYPE, _T_RB, _T_SIZE, _T_E, _T_MAT, _T_LP, _T_C, _T_LEN = 0, 1, 2, 5, 8, 17, 20, 21
+
+
+@njit(cache=True, error_model="numpy")
+def _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, x, dist, geomid):  # pragma: no cover - compiled
+    """Take the hits of sensor ``s``'s rays on plane geom ``g`` where they are the nearest yet.
+
+    The plane branch of :func:`_ray_geom` for every ray of one sensor, written without early
+    returns and with NumPy's error model (no zero-divisor check), so that LLVM vectorises it.
+
+    Args:
+        vec: (S, 3, n) float64, unit rays in the world frame, a row per axis.
+        s: sensor index.
+        g: geom id.
+        s0: ``geom_size[g, 0]``, metres (half size along x; <= 0 is infinite).
+        s1: ``geom_size[g, 1]``, metres (half size along y; <= 0 is infinite).
+        lp0: sensor position x in the geom frame, metres.
+        lp1: sensor position y in the geom frame, metres.
+        lp2: sensor position z in the geom frame, metres.
+        x: (9,) float64, the geom's orientation (``geom_xmat[g]``).
+        dist: (S, n) float64, metres, ray lengths to the nearest hit so far (-1: none); updated.
+        geomid: (S, n) int32, geom of that hit (-1: none); updated.
+    """
+    x0, x1, x2, x3, x4, x5, x6, x7, x8 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]
+    for k in range(vec.shape[2]):
+        vx = vec[s, 0, k]
+        vy = vec[s, 1, k]
+        vz = vec[s, 2, k]
+        lv0 = x0 * vx + x3 * vy + x6 * vz
+        lv1 = x1 * vx + x4 * vy + x7 * vz
+        lv2 = x2 * vx + x5 * vy + x8 * vz
+        t = -lp2 / lv2
+        best = dist[s, k]
+        if (
+            not (lv2 > -_MINVAL)
+            and t >= 0.0
+            and (s0 <= 0.0 or abs(lp0 + t * lv0) <= s0)
+            and (s1 <= 0.0 or abs(lp1 + t * lv1) <= s1)
+            and (best < 0.0 or t < best)
+        ):
+            dist[s, k] = t
+            geomid[s, k] = g
 
 
 @njit(cache=True)
 def _cast_primitives(
-    dirs,
+    dirs_t,
     cone_cos,
     site_xpos,
     site_xmat,
@@ -684,6 +726,7 @@ def _cast_primitives(
     max_range,
     table,
     table_id,
+    vec,
     dist,
     geomid,
 ):  # pragma: no cover - compiled
@@ -693,9 +736,12 @@ def _cast_primitives(
     material) alpha is 0 are skipped; the geom-group mask is already applied in ``cand``.
     Geoms whose bounding sphere lies beyond ``max_range`` or outside the sensor's view cone are
     culled once per sensor; each remaining non-plane geom gets a bounding-sphere test per ray.
+    Geoms are the outer loop and rays the inner one (each ray still meets the geoms in the
+    same order, so ties go the same way): a plane is then one vectorised pass
+    (:func:`_cast_plane`).
 
     Args:
-        dirs: (n, 3) float64, unit rays in the site frame.
+        dirs_t: (3, n) float64, unit rays in the site frame, a row per axis.
         cone_cos: cosine of the half-angle of the cone around +x that holds all rays.
         site_xpos: (nsite, 3) float64, ``data.site_xpos``.
         site_xmat: (nsite, 9) float64, ``data.site_xmat``.
@@ -709,18 +755,18 @@ def _cast_primitives(
         geom_xpos: (ngeom, 3) float64, ``data.geom_xpos``.
         geom_xmat: (ngeom, 9) float64, ``data.geom_xmat``.
         max_range: metres, cull distance.
-        table: (G, 17) float64, scratch: type, bounding radius, size, pos, mat of kept geoms.
+        table: (G, 21) float64, scratch: the kept geoms' columns ``_T_*``.
         table_id: (G,) int32, scratch: their ids.
+        vec: (S, 3, n) float64, written: the rays in the world frame (:func:`_rotate_rays`).
         dist: (S, n) float64, metres, written: ray length to the nearest hit, -1 if none.
         geomid: (S, n) int32, written: geom hit, -1 if none.
     """
     cone_sin = math.sqrt(max(0.0, 1.0 - cone_cos * cone_cos))
+    _rotate_rays(dirs_t, site_xmat, site_ids, vec)
     for s in range(site_ids.shape[0]):
         i = site_ids[s]
         o0, o1, o2 = site_xpos[i, 0], site_xpos[i, 1], site_xpos[i, 2]
-        r0, r1, r2 = site_xmat[i, 0], site_xmat[i, 1], site_xmat[i, 2]
-        r3, r4, r5 = site_xmat[i, 3], site_xmat[i, 4], site_xmat[i, 5]
-        r6, r7, r8 = site_xmat[i, 6], site_xmat[i, 7], site_xmat[i, 8]
+        r0, r3, r6 = site_xmat[i, 0], site_xmat[i, 3], site_xmat[i, 6]
         na = 0
         for gi in range(cand.shape[0]):
             g = cand[gi]
@@ -746,50 +792,55 @@ def _cast_primitives(
             table[na, _T_RB] = rb
             for j in range(3):
                 table[na, _T_SIZE + j] = geom_size[g, j]
-                table[na, _T_POS + j] = geom_xpos[g, j]
+            e0 = o0 - geom_xpos[g, 0]
+            e1 = o1 - geom_xpos[g, 1]
+            e2 = o2 - geom_xpos[g, 2]
+            table[na, _T_E] = e0
+            table[na, _T_E + 1] = e1
+            table[na, _T_E + 2] = e2
             for j in range(9):
                 table[na, _T_MAT + j] = geom_xmat[g, j]
+            x = geom_xmat[g]
+            table[na, _T_LP] = x[0] * e0 + x[3] * e1 + x[6] * e2
+            table[na, _T_LP + 1] = x[1] * e0 + x[4] * e1 + x[7] * e2
+            table[na, _T_LP + 2] = x[2] * e0 + x[5] * e1 + x[8] * e2
+            table[na, _T_C] = e0 * e0 + e1 * e1 + e2 * e2 - rb * rb
             table_id[na] = g
             na += 1
-        for k in range(dirs.shape[0]):
-            d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-            vx = r0 * d0 + r1 * d1 + r2 * d2
-            vy = r3 * d0 + r4 * d1 + r5 * d2
-            vz = r6 * d0 + r7 * d1 + r8 * d2
-            best = -1.0
-            best_g = -1
-            for a in range(na):
-                gt = int(table[a, _T_TYPE])
-                e0 = o0 - table[a, _T_POS]
-                e1 = o1 - table[a, _T_POS + 1]
-                e2 = o2 - table[a, _T_POS + 2]
-                if gt != _PLANE:
-                    rb = table[a, _T_RB]
-                    b = vx * e0 + vy * e1 + vz * e2
-                    c = e0 * e0 + e1 * e1 + e2 * e2 - rb * rb
-                    if c > 0.0:
-                        disc = b * b - c
-                        if b > 0.0 or disc < 0.0:
-                            continue  # misses the bounding sphere, or it lies behind
-                        if best >= 0.0 and -b - math.sqrt(disc) > best:
-                            continue  # bounding sphere wholly beyond the nearest hit so far
-                x0, x1, x2 = table[a, _T_MAT], table[a, _T_MAT + 1], table[a, _T_MAT + 2]
-                x3, x4, x5 = table[a, _T_MAT + 3], table[a, _T_MAT + 4], table[a, _T_MAT + 5]
-                x6, x7, x8 = table[a, _T_MAT + 6], table[a, _T_MAT + 7], table[a, _T_MAT + 8]
+        for k in range(dirs_t.shape[1]):
+            dist[s, k] = -1.0
+            geomid[s, k] = -1
+        for a in range(na):
+            gt = int(table[a, _T_TYPE])
+            g = table_id[a]
+            s0, s1, s2 = table[a, _T_SIZE], table[a, _T_SIZE + 1], table[a, _T_SIZE + 2]
+            e0, e1, e2 = table[a, _T_E], table[a, _T_E + 1], table[a, _T_E + 2]
+            lp0, lp1, lp2 = table[a, _T_LP], table[a, _T_LP + 1], table[a, _T_LP + 2]
+            if gt == _PLANE:
+                _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, table[a, _T_MAT:_T_LP], dist, geomid)
+                continue
+            c = table[a, _T_C]
+            x0, x1, x2 = table[a, _T_MAT], table[a, _T_MAT + 1], table[a, _T_MAT + 2]
+            x3, x4, x5 = table[a, _T_MAT + 3], table[a, _T_MAT + 4], table[a, _T_MAT + 5]
+            x6, x7, x8 = table[a, _T_MAT + 6], table[a, _T_MAT + 7], table[a, _T_MAT + 8]
+            for k in range(dirs_t.shape[1]):
+                vx = vec[s, 0, k]
+                vy = vec[s, 1, k]
+                vz = vec[s, 2, k]
+                best = dist[s, k]
+                b = vx * e0 + vy * e1 + vz * e2
+                if c > 0.0:
+                    disc = b * b - c
+                    if b > 0.0 or disc < 0.0:
+                        continue  # misses the bounding sphere, or it lies behind
+                    if best >= 0.0 and -b - math.sqrt(disc) > best:
+                        continue  # bounding sphere wholly beyond the nearest hit so far
                 t = _ray_geom(
-                    gt,
-                    table[a, _T_SIZE],
-                    table[a, _T_SIZE + 1],
-                    table[a, _T_SIZE + 2],
-                    x0 * e0 + x3 * e1 + x6 * e2,
-                    x1 * e0 + x4 * e1 + x7 * e2,
-                    x2 * e0 + x5 * e1 + x8 * e2,
+                    gt, s0, s1, s2, lp0, lp1, lp2,
                     x0 * vx + x3 * vy + x6 * vz,
                     x1 * vx + x4 * vy + x7 * vz,
                     x2 * vx + x5 * vy + x8 * vz,
-                )
+                )  # fmt: skip
                 if t >= 0.0 and (best < 0.0 or t < best):
-                    best = t
-                    best_g = table_id[a]
-            dist[s, k] = best
-            geomid[s, k] = best_g
+                    dist[s, k] = t
+                    geomid[s, k] = g
