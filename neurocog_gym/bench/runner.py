@@ -370,6 +370,7 @@ def run_trial(
         "obstacles": info.get("obstacles") or [b.to_json() for b in u.pool.blocks],
         "appeared_at": _num(appeared_at),
         "appear_leg": info.get("appear_leg", getattr(u, "appear_leg", None)),
+        "appear_forced": bool(info.get("appear_forced", getattr(u, "appear_forced", False))),
         "time": round(t_end, 4),
         "time_to_pass": round(t_end - t_from, 4) if passed and not unstable else None,
         "contacts": {

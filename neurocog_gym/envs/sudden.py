@@ -26,6 +26,13 @@ class SuddenObstacleEnv(ObstacleEnv):
     go) is drawn again, up to ``placement_tries`` times, and if none fits, the block appears at
     the next front-leg lift-off instead.
 
+    Every episode gets its block: if no front lift-off has come ``appear_deadline`` s after
+    ``appear_after`` (an agent can keep the front soles loaded or hold a swing back — a PPO
+    policy learned to, and walked 7 s without ever meeting a block), the block appears then,
+    across the path of the front leg the CPG swings (or, if it swings neither, of the less loaded
+    one), and ``info["appear_forced"]`` is True. The CPG's trot lifts a front foot every ~0.23 s,
+    so the default 1 s never fires under the blind, AEF or avoid controllers.
+
     ## Action space, observation space
 
     As ``NeuroCog/Walk-v0`` (15-value AEF output layer), plus these observation keys:
@@ -54,7 +61,8 @@ class SuddenObstacleEnv(ObstacleEnv):
 
     ## Arguments
 
-    As ``WalkEnv``, plus ``appear_window`` (s, default (1.0, 2.0)), ``pair_probability`` (0.3),
+    As ``WalkEnv``, plus ``appear_window`` (s, default (1.0, 2.0)), ``appear_deadline`` (s, 1.0),
+    ``pair_probability`` (0.3),
     ``min_gap`` (m, 0.01: closest a new block may come to the robot), ``placement_tries`` (5),
     ``tof`` (``ToFParams``), ``perception`` (``PipelineParams``: ``gng="gng"`` switches the
     attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``.
@@ -63,6 +71,7 @@ class SuddenObstacleEnv(ObstacleEnv):
     def __init__(
         self,
         appear_window: tuple[float, float] = (1.0, 2.0),
+        appear_deadline: float = 1.0,
         pair_probability: float = 0.3,
         min_gap: float = 0.01,
         placement_tries: int = 5,
@@ -73,6 +82,8 @@ class SuddenObstacleEnv(ObstacleEnv):
             raise ValueError(
                 f"appear_window must be (lo, hi) with 0 <= lo <= hi, got {appear_window}"
             )
+        if not appear_deadline >= 0.0:
+            raise ValueError(f"appear_deadline must be >= 0 s, got {appear_deadline}")
         if not 0.0 <= pair_probability <= 1.0:
             raise ValueError(f"pair_probability must be in [0, 1], got {pair_probability}")
         if not min_gap >= 0.0:
@@ -80,6 +91,7 @@ class SuddenObstacleEnv(ObstacleEnv):
         if int(placement_tries) < 1:
             raise ValueError(f"placement_tries must be >= 1, got {placement_tries}")
         self.appear_window = (float(lo), float(hi))
+        self.appear_deadline = float(appear_deadline)
         self.pair_probability = float(pair_probability)
         self.min_gap = float(min_gap)
         self.placement_tries = int(placement_tries)
@@ -87,7 +99,8 @@ class SuddenObstacleEnv(ObstacleEnv):
         from gymnasium.utils import EzPickle
 
         EzPickle.__init__(
-            self, appear_window=appear_window, pair_probability=pair_probability,
+            self, appear_window=appear_window, appear_deadline=appear_deadline,
+            pair_probability=pair_probability,
             min_gap=min_gap, placement_tries=placement_tries, **self._ezpickle_kwargs,
         )  # fmt: skip
 
@@ -95,6 +108,7 @@ class SuddenObstacleEnv(ObstacleEnv):
         self.appear_after = float(self.np_random.uniform(*self.appear_window))
         self.appeared_at = None
         self.appear_leg = -1
+        self.appear_forced = False
         self.rejected_swings = 0
         self._front_down = np.ones(2, dtype=bool)
 
@@ -110,15 +124,28 @@ class SuddenObstacleEnv(ObstacleEnv):
         swinging = self.generator.swinging[list(FRONT_LEGS)]
         lifted = self._front_down & ~down & swinging
         self._front_down = down
-        if self.data.time < self.appear_after or not lifted.any():
+        if self.data.time < self.appear_after:
             return
-        leg = FRONT_LEGS[int(np.flatnonzero(lifted)[0])]
+        if lifted.any():
+            leg = FRONT_LEGS[int(np.flatnonzero(lifted)[0])]
+            forced = False
+        elif self.data.time >= self.appear_after + self.appear_deadline:
+            # No lift-off by the deadline: the block appears anyway, before the leg the CPG
+            # swings, else before the less loaded front leg.
+            if swinging.any():
+                leg = FRONT_LEGS[int(np.flatnonzero(swinging)[0])]
+            else:
+                leg = FRONT_LEGS[int(np.argmin(touch[list(FRONT_LEGS)]))]
+            forced = True
+        else:
+            return
         for _ in range(self.placement_tries):
             for b in self._draw_blocks(leg):
                 self.pool.add(self.model, self.data, b)
             if self._gap_to_robot() >= self.min_gap:
                 self.appeared_at = float(self.data.time)
                 self.appear_leg = int(leg)
+                self.appear_forced = forced
                 return
             # Placed by hand in front of the robot, never into it: take the blocks away again.
             self.pool.place(self.model, self.data, [])
@@ -167,6 +194,7 @@ class SuddenObstacleEnv(ObstacleEnv):
         out = super()._outcome(fell, unstable)
         out["appeared_at"] = self.appeared_at
         out["appear_leg"] = self.appear_leg
+        out["appear_forced"] = self.appear_forced
         out["rejected_swings"] = self.rejected_swings
         return out
 

@@ -27,6 +27,7 @@ def test_sudden_obstacle_appears_in_the_swing_path_of_a_front_leg():
         u = env.unwrapped
         _walk_until(env, lambda i, u=u: u.appeared_at is not None)
         assert u.appeared_at is not None and 1.0 <= u.appeared_at <= 2.5
+        assert not u.appear_forced  # a real lift-off, well before the deadline
         leg = u.appear_leg
         assert leg in (0, 1)
         # At appearance the leg had just lifted off; its foot is behind the block's near face
@@ -57,6 +58,25 @@ def test_sudden_obstacle_appears_as_the_leg_swings():
             z.append(u.data.site_xpos[u.robot.foot_site[leg], 2])
         lifted.append(max(z) > 0.03)
     assert np.mean(lifted) >= 0.75
+
+
+def test_sudden_obstacle_appears_by_the_deadline_without_a_lift_off():
+    """An agent cannot keep the block away by never lifting a front foot (a PPO policy learned
+    exactly that and walked 7 s without meeting a block): at ``appear_after + appear_deadline``
+    it appears anyway, ahead of a front foot, flagged ``appear_forced``."""
+    env = gym.make(SUDDEN, appear_deadline=0.5)
+    u = env.unwrapped
+    for seed in range(2):
+        env.reset(seed=seed)
+        u.touch = lambda: np.ones(4)  # every sole reads loaded: no lift-off is ever seen
+        _, info, _, _ = _walk_until(env, lambda i: u.appeared_at is not None)
+        assert u.appear_forced and info["appear_forced"]
+        assert u.appear_after + 0.5 <= u.appeared_at <= u.appear_after + 0.6
+        foot = u.data.site_xpos[u.robot.foot_site[u.appear_leg]]
+        box = u.pool.boxes()[0]
+        assert foot[0] - 0.02 < box[0, 0] < foot[0] + 0.25
+    with pytest.raises(ValueError, match="appear_deadline"):
+        gym.make(SUDDEN, appear_deadline=-1.0)
 
 
 def test_sudden_obstacle_never_appears_inside_the_robot():
