@@ -271,7 +271,8 @@ def plot_similarity(runs: list[Run], path: Path, window: float = 2.0) -> Path:
             ax.set_xlabel("s after the obstacle appeared / came into view")
             if j == 0:
                 ax.set_ylabel("similarity μ (Eq. 16)")
-            ax.legend(fontsize=7, loc="lower right")
+            if ax.get_legend_handles_labels()[0]:  # no curve when no trial of a case passed
+                ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     io.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
