@@ -1003,37 +1003,59 @@ _N_ENDS = 16
 
 
 @njit(cache=True)
+def _smallest_largest(values, cnt, n_end, low, high):
+    """The ``n_end`` smallest (ascending) and largest (descending) of ``values[:cnt]``.
+
+    One pass, by insertion into ``low[:n_end]`` and ``high[:n_end]``. Returns True if a value
+    is NaN (its place in the lists then depends on ``n_end``).
+    """
+    nl = 0
+    nh = 0
+    nan = False
+    for i in range(cnt):
+        v = values[i]
+        nan |= v != v
+        if nl < n_end or v < low[nl - 1]:
+            j = nl if nl < n_end else n_end - 1
+            while j > 0 and low[j - 1] > v:
+                low[j] = low[j - 1]
+                j -= 1
+            low[j] = v
+            if nl < n_end:
+                nl += 1
+        if nh < n_end or v > high[nh - 1]:
+            j = nh if nh < n_end else n_end - 1
+            while j > 0 and high[j - 1] < v:
+                high[j] = high[j - 1]
+                j -= 1
+            high[j] = v
+            if nh < n_end:
+                nh += 1
+    return nan
+
+
+@njit(cache=True)
 def _trimmed_extent(values, cnt, q_lo, gap, low, high):
     """Both ends of ``values[:cnt]`` after the quantile cut ``q_lo`` and the stray-point walk.
 
     The same numbers as sorting the values, cutting ``q_lo`` of them at each end and then
     dropping an end value while its gap to the next one inwards exceeds ``gap`` (repeatedly).
     Without a quantile cut, only the ``_N_ENDS`` smallest and largest values are needed, found
-    in one pass; a full sort is the fallback when the walk goes deeper or ``q_lo`` > 0.
+    in one pass; a full sort is the fallback when the walk goes deeper or ``q_lo`` > 0. Most
+    ends have no stray point, which the two smallest and two largest values show: they are
+    found first, and the ``_N_ENDS`` only when a walk starts (a sensor-ordered frame gives
+    the values in runs of rising or falling order, where each insertion into a list of
+    ``_N_ENDS`` shifts the whole list).
     """
     n_end = _N_ENDS
     if q_lo == 0.0 and cnt > 2 * n_end:
-        # The n_end smallest (ascending) and largest (descending) values, by insertion.
-        nl = 0
-        nh = 0
-        for i in range(cnt):
-            v = values[i]
-            if nl < n_end or v < low[nl - 1]:
-                j = nl if nl < n_end else n_end - 1
-                while j > 0 and low[j - 1] > v:
-                    low[j] = low[j - 1]
-                    j -= 1
-                low[j] = v
-                if nl < n_end:
-                    nl += 1
-            if nh < n_end or v > high[nh - 1]:
-                j = nh if nh < n_end else n_end - 1
-                while j > 0 and high[j - 1] < v:
-                    high[j] = high[j - 1]
-                    j -= 1
-                high[j] = v
-                if nh < n_end:
-                    nh += 1
+        if (
+            not _smallest_largest(values, cnt, 2, low, high)
+            and not low[1] - low[0] > gap
+            and not high[0] - high[1] > gap
+        ):
+            return low[0], high[0]
+        _smallest_largest(values, cnt, n_end, low, high)
         a = 0
         while a < n_end - 1 and low[a + 1] - low[a] > gap:
             a += 1
