@@ -1003,38 +1003,6 @@ _N_ENDS = 16
 
 
 @njit(cache=True)
-def _smallest_largest(values, cnt, n_end, low, high):
-    """The ``n_end`` smallest (ascending) and largest (descending) of ``values[:cnt]``.
-
-    One pass, by insertion into ``low[:n_end]`` and ``high[:n_end]``. Returns True if a value
-    is NaN (its place in the lists then depends on ``n_end``).
-    """
-    nl = 0
-    nh = 0
-    nan = False
-    for i in range(cnt):
-        v = values[i]
-        nan |= v != v
-        if nl < n_end or v < low[nl - 1]:
-            j = nl if nl < n_end else n_end - 1
-            while j > 0 and low[j - 1] > v:
-                low[j] = low[j - 1]
-                j -= 1
-            low[j] = v
-            if nl < n_end:
-                nl += 1
-        if nh < n_end or v > high[nh - 1]:
-            j = nh if nh < n_end else n_end - 1
-            while j > 0 and high[j - 1] < v:
-                high[j] = high[j - 1]
-                j -= 1
-            high[j] = v
-            if nh < n_end:
-                nh += 1
-    return nan
-
-
-@njit(cache=True)
 def _trimmed_extent(values, cnt, q_lo, gap, low, high):
     """Both ends of ``values[:cnt]`` after the quantile cut ``q_lo`` and the stray-point walk.
 
@@ -1043,19 +1011,58 @@ def _trimmed_extent(values, cnt, q_lo, gap, low, high):
     Without a quantile cut, only the ``_N_ENDS`` smallest and largest values are needed, found
     in one pass; a full sort is the fallback when the walk goes deeper or ``q_lo`` > 0. Most
     ends have no stray point, which the two smallest and two largest values show: they are
-    found first, and the ``_N_ENDS`` only when a walk starts (a sensor-ordered frame gives
-    the values in runs of rising or falling order, where each insertion into a list of
-    ``_N_ENDS`` shifts the whole list).
+    found first, in registers, and the ``_N_ENDS`` only when a walk starts (a sensor-ordered
+    frame gives the values in runs of rising or falling order, where each insertion into a
+    list of ``_N_ENDS`` shifts the whole list). A NaN value takes the long way, whose lists
+    place it as before.
     """
     n_end = _N_ENDS
     if q_lo == 0.0 and cnt > 2 * n_end:
-        if (
-            not _smallest_largest(values, cnt, 2, low, high)
-            and not low[1] - low[0] > gap
-            and not high[0] - high[1] > gap
-        ):
-            return low[0], high[0]
-        _smallest_largest(values, cnt, n_end, low, high)
+        # The two smallest (lo0 <= lo1) and largest (hi0 >= hi1), by the same strict
+        # comparisons as the insertion into lists of two.
+        lo0 = np.inf
+        lo1 = np.inf
+        hi0 = -np.inf
+        hi1 = -np.inf
+        nan = False
+        for i in range(cnt):
+            v = values[i]
+            nan |= v != v
+            if v < lo1:
+                if v < lo0:
+                    lo1 = lo0
+                    lo0 = v
+                else:
+                    lo1 = v
+            if v > hi1:
+                if v > hi0:
+                    hi1 = hi0
+                    hi0 = v
+                else:
+                    hi1 = v
+        if not nan and not lo1 - lo0 > gap and not hi0 - hi1 > gap:
+            return lo0, hi0
+        # The n_end smallest (ascending) and largest (descending) values, by insertion.
+        nl = 0
+        nh = 0
+        for i in range(cnt):
+            v = values[i]
+            if nl < n_end or v < low[nl - 1]:
+                j = nl if nl < n_end else n_end - 1
+                while j > 0 and low[j - 1] > v:
+                    low[j] = low[j - 1]
+                    j -= 1
+                low[j] = v
+                if nl < n_end:
+                    nl += 1
+            if nh < n_end or v > high[nh - 1]:
+                j = nh if nh < n_end else n_end - 1
+                while j > 0 and high[j - 1] < v:
+                    high[j] = high[j - 1]
+                    j -= 1
+                high[j] = v
+                if nh < n_end:
+                    nh += 1
         a = 0
         while a < n_end - 1 and low[a + 1] - low[a] > gap:
             a += 1
