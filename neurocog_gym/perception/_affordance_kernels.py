@@ -1009,10 +1009,39 @@ def _trimmed_extent(values, cnt, q_lo, gap, low, high):
     The same numbers as sorting the values, cutting ``q_lo`` of them at each end and then
     dropping an end value while its gap to the next one inwards exceeds ``gap`` (repeatedly).
     Without a quantile cut, only the ``_N_ENDS`` smallest and largest values are needed, found
-    in one pass; a full sort is the fallback when the walk goes deeper or ``q_lo`` > 0.
+    in one pass; a full sort is the fallback when the walk goes deeper or ``q_lo`` > 0. Most
+    ends have no stray point, which the two smallest and two largest values show: they are
+    found first, in registers, and the ``_N_ENDS`` only when a walk starts (a sensor-ordered
+    frame gives the values in runs of rising or falling order, where each insertion into a
+    list of ``_N_ENDS`` shifts the whole list). A NaN value takes the long way, whose lists
+    place it as before.
     """
     n_end = _N_ENDS
     if q_lo == 0.0 and cnt > 2 * n_end:
+        # The two smallest (lo0 <= lo1) and largest (hi0 >= hi1), by the same strict
+        # comparisons as the insertion into lists of two.
+        lo0 = np.inf
+        lo1 = np.inf
+        hi0 = -np.inf
+        hi1 = -np.inf
+        nan = False
+        for i in range(cnt):
+            v = values[i]
+            nan |= v != v
+            if v < lo1:
+                if v < lo0:
+                    lo1 = lo0
+                    lo0 = v
+                else:
+                    lo1 = v
+            if v > hi1:
+                if v > hi0:
+                    hi1 = hi0
+                    hi0 = v
+                else:
+                    hi1 = v
+        if not nan and not lo1 - lo0 > gap and not hi0 - hi1 > gap:
+            return lo0, hi0
         # The n_end smallest (ascending) and largest (descending) values, by insertion.
         nl = 0
         nh = 0

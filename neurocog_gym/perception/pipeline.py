@@ -193,7 +193,7 @@ class AttentionPipeline:
         node extents fall short of a block's edges by about half a node spacing on each side.
         """
         pts = np.asarray(points)
-        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not np.isfinite(aff.ground_z):
+        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not math.isfinite(aff.ground_z):
             return aff
         if pts.dtype not in (np.float32, np.float64) or not pts.flags.c_contiguous:
             pts = np.ascontiguousarray(pts, dtype=np.float64)
@@ -201,12 +201,13 @@ class AttentionPipeline:
         h = float(np.hypot(fwd[0], fwd[1]))
         if not h > 1e-9:
             return aff
-        fx, fy = fwd[0] / h, fwd[1] / h
+        # Python floats, not NumPy scalars: the box arithmetic below is scalar.
+        fx, fy = float(fwd[0]) / h, float(fwd[1]) / h
         origin = np.asarray(sensor_origin, dtype=np.float64).reshape(-1)
-        if origin.shape != (3,) or not np.all(np.isfinite(origin)):
+        if origin.shape != (3,) or not all(map(math.isfinite, origin.tolist())):
             return aff
         idx = [i for i, o in enumerate(aff.objects) if o.kind == "object"]
-        boxes = np.ascontiguousarray(np.stack([aff.objects[i].box for i in idx]), dtype=np.float64)
+        boxes = np.array([aff.objects[i].box for i in idx], dtype=np.float64)
         ap = self.affordance_params
         p = self.params
         res = _k.refine_objects_kernel(
