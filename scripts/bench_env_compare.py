@@ -132,6 +132,9 @@ def main(argv: list[str] | None = None) -> None:
                 f"`{sudden}`, this tree {head}{mark}": (sudden, str(ROOT)),
                 "`Ant-v5`, random actions": ("Ant-v5", None),
             }
+            # The sameness check first: it also compiles both trees' numba caches (a fresh
+            # worktree has none), so no timed round pays for compilation.
+            same = _run(_TRAJ, [], tree) == _run(_TRAJ, [], str(ROOT))
             load0, up0 = load_average(), _uptime()
             rates: dict[str, list[float]] = {k: [] for k in rows}
             for r in range(args.rounds):
@@ -139,7 +142,6 @@ def main(argv: list[str] | None = None) -> None:
                     rates[name].append(float(_run(_RATE, [env_id, str(args.seconds)], path)))
                 print(f"round {r + 1}/{args.rounds}: "
                       + ", ".join(f"{v[-1]:.0f}" for v in rates.values()), flush=True)  # fmt: skip
-            same = _run(_TRAJ, [], tree) == _run(_TRAJ, [], str(ROOT))
             load1, up1 = load_average(), _uptime()
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", tree])
@@ -155,7 +157,8 @@ def main(argv: list[str] | None = None) -> None:
         f"Command: `python scripts/bench_env_compare.py --baseline {args.baseline} --rounds "
         f"{args.rounds} --seconds {args.seconds:g}`. One fresh process per row and round, rows "
         f"interleaved, {args.seconds:g} s timed after 200 warm-up steps; medians over "
-        f"{args.rounds} rounds (min–max in brackets); episode resets inside the timed steps.",
+        f"{args.rounds} rounds (min–max in brackets); episode resets inside the timed steps. Both "
+        "trees' numba caches are compiled (by the sameness check) before the first round.",
         "",
         "| row | env steps/s | × Ant-v5 | × baseline |",
         "|---|---:|---:|---:|",
@@ -166,7 +169,15 @@ def main(argv: list[str] | None = None) -> None:
             f"| {k} | {med[k]:,.0f} ({min(v):,.0f}–{max(v):,.0f}) | {med[k] / ant:.2f} "
             f"| {med[k] / med[names[0]]:.2f} |"
         )
+    paired = [t / b for b, t in zip(rates[names[0]], rates[names[1]], strict=True)]
+    vs_ant = [t / a for t, a in zip(rates[names[1]], rates[names[2]], strict=True)]
     lines += [
+        "",
+        "Paired within each round (the rows of a round ran back to back, so a load change "
+        "between rounds cancels): this tree / baseline "
+        f"{statistics.median(paired):.2f} (rounds: {', '.join(f'{x:.2f}' for x in paired)}); "
+        f"this tree / Ant-v5 {statistics.median(vs_ant):.2f} "
+        f"(rounds: {', '.join(f'{x:.2f}' for x in vs_ant)}).",
         "",
         "Same episodes in both trees (qpos after every step and the outcome of two seeded "
         "`aef` episodes per obstacle task, SHA-256): "
