@@ -215,12 +215,16 @@ def _outcome_callback():
         """Counts the outcome of every finished obstacle episode; logs the shares.
 
         ``fails`` splits the fails into ``fell`` (fell or physics fault) and ``stuck`` (not
-        passed when the time limit ran out)."""
+        passed when the time limit ran out). ``blocks`` counts the sudden-obstacle episodes whose
+        block appeared only at the env's deadline (``forced``: the policy kept the front soles
+        loaded through the swings that would have triggered it) or never (``none``: the episode
+        ended first) — a policy that learns to keep the block away shows up here."""
 
         def __init__(self):
             super().__init__()
             self.counts = {"success": 0, "touch": 0, "fail": 0}
             self.fails = {"fell": 0, "stuck": 0}
+            self.blocks = {"forced": 0, "none": 0}
             self._recent: list[str] = []
 
         def _on_step(self) -> bool:
@@ -234,6 +238,10 @@ def _outcome_callback():
                     if o == "fail":
                         fell = info.get("fell") or info.get("sim_unstable")
                         self.fails["fell" if fell else "stuck"] += 1
+                    if info.get("appear_forced"):
+                        self.blocks["forced"] += 1
+                    elif "appeared_at" in info and info["appeared_at"] is None:
+                        self.blocks["none"] += 1
                     self._recent = (self._recent + [o])[-100:]
             return True
 
@@ -243,6 +251,8 @@ def _outcome_callback():
                     self.logger.record(f"outcome/{o}", self._recent.count(o) / len(self._recent))
             for k, n in self.fails.items():
                 self.logger.record(f"outcome/total_{k}", n)
+            for k, n in self.blocks.items():
+                self.logger.record(f"outcome/total_block_{k}", n)
 
     return OutcomeCallback()
 
@@ -357,6 +367,7 @@ def train(args: Args) -> dict:
         "steps_per_s": round(steps / elapsed, 1) if elapsed > 0 and steps else None,
         "outcomes_this_session": outcome.counts,
         "fails_this_session": outcome.fails,
+        "sudden_blocks_this_session": outcome.blocks,
         "normalize_obs": args.normalize_obs,
         "model": str(out / "model.zip"),
     }
@@ -373,7 +384,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     print(f"{s['total_steps']} steps ({s['steps_this_session']} now) in {s['wall_s']:.0f} s "
           f"({s['steps_per_s']} steps/s); outcomes {s['outcomes_this_session']} "
-          f"(fails {s['fails_this_session']}); "
+          f"(fails {s['fails_this_session']}; sudden blocks {s['sudden_blocks_this_session']}); "
           f"model: {s['model']}")  # fmt: skip
     return 0
 

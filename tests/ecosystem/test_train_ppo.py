@@ -39,6 +39,7 @@ def test_train_resume_and_bench_the_model(tmp_path):
     assert (out / "vecnormalize.pkl").is_file()  # observation statistics beside the model
     assert s["normalize_obs"] is True
     assert sum(s["fails_this_session"].values()) == s["outcomes_this_session"]["fail"]
+    assert set(s["sudden_blocks_this_session"]) == {"forced", "none"}
     assert sorted(p.name for p in (out / "checkpoints").iterdir()) == [
         "ppo_128_steps.zip",
         "ppo_256_steps.zip",
@@ -100,3 +101,26 @@ def test_bad_arguments_exit_2():
     assert r.returncode == 2 and "--target-kl" in r.stderr
     r = _run(str(SCRIPT), "--resume", "--out", "/nonexistent/ppo_run")
     assert r.returncode == 2 and "no checkpoint" in r.stderr
+
+
+def test_outcome_callback_counts_blocks_kept_away():
+    """The training log shows a policy that keeps the sudden block from appearing."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("train_ppo", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # its dataclasses look their module up there
+    spec.loader.exec_module(mod)
+    cb = mod._outcome_callback()
+    infos = [
+        {"outcome": "touch", "passed": True, "appeared_at": 1.3, "appear_forced": False},
+        {"outcome": "touch", "passed": True, "appeared_at": 2.9, "appear_forced": True},
+        {"outcome": "fail", "passed": False, "fell": True, "appeared_at": None},
+        {"outcome": "fail", "passed": False, "appeared_at": 1.8, "appear_forced": False},
+        {"x_position": 0.3},  # not finished: not counted
+    ]
+    cb.locals = {"infos": infos, "dones": [True, True, True, True, False]}
+    assert cb._on_step()
+    assert cb.counts == {"success": 0, "touch": 2, "fail": 2}
+    assert cb.fails == {"fell": 1, "stuck": 1}
+    assert cb.blocks == {"forced": 1, "none": 1}
