@@ -614,6 +614,7 @@ def trained_policy_lines(train_run: str, bench_runs: tuple[str, ...]) -> list[st
         t = json.loads((Path(train_run) / "train_summary.json").read_text())
         a = json.loads((Path(train_run) / "args.json").read_text())
         fails = t.get("fails_this_session")
+        blocks = t.get("sudden_blocks_this_session")
         lines += [
             "### The trained policy",
             "",
@@ -626,6 +627,12 @@ def trained_policy_lines(train_run: str, bench_runs: tuple[str, ...]) -> list[st
             f"Outcomes of its training episodes (stochastic actions): "
             f"{t['outcomes_this_session']}"
             + (f", the fails {fails['fell']} fell and {fails['stuck']} stuck" if fails else "")
+            + (
+                f"; sudden blocks that appeared only at the deadline {blocks['forced']}, never "
+                f"{blocks['none']}"
+                if blocks
+                else ""
+            )
             + ". Evaluated with deterministic actions by `neurocog bench --policy MODEL` "
             "(trials per row below), beside the other controllers:",
             "",
