@@ -7,7 +7,6 @@ generator (SPEC §1, §6): 12 joint-interrupt values Theta and 3 walking-provisi
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
@@ -19,6 +18,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 from gymnasium.utils import EzPickle
 
 from neurocog_gym import paths
+from neurocog_gym.envs._kernels import abs_power, clip_action, fault_check
 from neurocog_gym.locomotion.gait import Gait, default_gait
 from neurocog_gym.locomotion.generator import LocomotionGenerator
 from neurocog_gym.robot.model import FAULT_WARNINGS, GRAVITY, RobotIndex
@@ -103,6 +103,14 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
             self.gait, self.robot.joint_lo, self.robot.joint_hi, dt=self.dt
         )
         self._weight_per_leg = self.robot.mass * GRAVITY / 4.0
+        # The joints' qpos/qvel entries, actuators and touch sensors are contiguous in the
+        # model: slices read them as views (fancy indexing copies on every read).
+        self._qpos_ix = _as_slice(self.robot.qpos_adr)
+        self._dof_ix = _as_slice(self.robot.dof_adr)
+        self._act_ix = _as_slice(self.robot.actuator)
+        self._touch_ix = _as_slice(self.robot.touch_adr)
+        self._cycle_dt = self.dt  # MujocoEnv.dt is a property computed on every read
+        self._fault_ids = np.array([int(w) for w in FAULT_WARNINGS], dtype=np.int64)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(ACTION_DIM,), dtype=np.float32)
         self.observation_space = spaces.Dict(self._observation_spaces())
         self._power = 0.0
@@ -131,16 +139,16 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
     # -- proprioception -----------------------------------------------------------------------
 
     def joint_pos(self) -> np.ndarray:
-        """(12,) joint angles, rad."""
+        """(12,) joint angles, rad (a copy)."""
         return self.data.qpos[self.robot.qpos_adr]
 
     def joint_vel(self) -> np.ndarray:
-        """(12,) joint rates, rad/s."""
+        """(12,) joint rates, rad/s (a copy)."""
         return self.data.qvel[self.robot.dof_adr]
 
     def touch(self) -> np.ndarray:
         """(4,) sole contact force over a quarter of the body weight (1 = a quarter's load)."""
-        return self.data.sensordata[self.robot.touch_adr] / self._weight_per_leg
+        return self.data.sensordata[self._touch_ix] / self._weight_per_leg
 
     def _proprioception(self, touch: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The proprioceptive observation; ``touch``: this cycle's :meth:`touch`, if read."""
@@ -150,9 +158,10 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         torso = self.robot.torso_body
         rot = d.xmat[torso].reshape(3, 3)
         lin_vel = rot.T @ d.qvel[0:3]
+        f32 = np.float32
         return {
-            "joint_pos": self.joint_pos().astype(np.float32),
-            "joint_vel": self.joint_vel().astype(np.float32),
+            "joint_pos": d.qpos[self._qpos_ix].astype(f32),
+            "joint_vel": d.qvel[self._dof_ix].astype(f32),
             "touch": touch.astype(np.float32),
             "torso_quat": d.qpos[3:7].astype(np.float32),
             "torso_lin_vel": lin_vel.astype(np.float32),
@@ -192,10 +201,10 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
             and action.shape == (ACTION_DIM,)
             and action.dtype in (np.float32, np.float64)
         ):
-            # The common case, checked without the general dtype tests.
-            a = action.astype(np.float64)
-            if np.isfinite(a).all():
-                return np.minimum(np.maximum(a, -1.0), 1.0)
+            # The common case, checked and clipped in one compiled pass.
+            a = np.empty(ACTION_DIM)
+            if clip_action(action, a):
+                return a
         a = np.asarray(action)
         if a.shape != (ACTION_DIM,):
             raise ValueError(
@@ -215,14 +224,12 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         return int(sum(w.number for w in self._warn_stats))
 
     def _sim_unstable(self) -> bool:
+        """A new fault warning, a NaN or inf position, or a NaN, inf or |qvel| > 1e3."""
         d = self.data
-        n_warn = self._warning_count()
-        new = n_warn > self._warnings_seen
-        self._warnings_seen = n_warn
-        # A NaN or inf anywhere makes the sum / the maximum non-finite (and fails the test).
-        return bool(
-            new or not math.isfinite(float(d.qpos.sum())) or not float(np.abs(d.qvel).max()) <= 1e3
+        unstable, self._warnings_seen = fault_check(
+            d.qpos, d.qvel, d.warning.number, self._fault_ids, self._warnings_seen, 1e3
         )
+        return bool(unstable)
 
     def _fell(self) -> bool:
         up_z = self.data.xmat[self.robot.torso_body][8]
@@ -234,8 +241,9 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         interrupt, provision = a[:N_INTERRUPT], a[N_INTERRUPT:]
         x_before = float(self.data.qpos[0])
         self._before_control(interrupt, provision)
+        d = self.data
         target = self.generator.step(
-            provision, interrupt, self.joint_pos(), self.joint_vel(), self.touch()
+            provision, interrupt, d.qpos[self._qpos_ix], d.qvel[self._dof_ix], self.touch()
         )
         ctrl = self.data.ctrl
         ctrl[self.robot.actuator] = target
@@ -247,12 +255,9 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
                    for k, s in self.observation_space.items()}  # fmt: skip
             info = {"sim_unstable": True}
             return obs, 0.0, False, True, info
-        dof = self.robot.dof_adr
-        power = float(
-            np.sum(np.abs(self.data.actuator_force[self.robot.actuator] * self.data.qvel[dof]))
-        )
+        power = abs_power(d.actuator_force[self._act_ix], d.qvel[self._dof_ix])
         self._power = power
-        x_vel = (float(self.data.qpos[0]) - x_before) / self.dt
+        x_vel = (float(d.qpos[0]) - x_before) / self._cycle_dt
         self._after_physics()
         reward, terms = self._reward(x_vel, power)
         terminated = self._fell()
@@ -285,6 +290,14 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         tracking = float(np.exp(-(((x_vel - v) / (0.5 * v)) ** 2)))
         energy = -self.energy_weight * power
         return tracking + energy, {"reward_tracking": tracking, "reward_energy": energy}
+
+
+def _as_slice(index: np.ndarray) -> slice | np.ndarray:
+    """``index`` as a slice when it is a run of consecutive integers, else unchanged."""
+    index = np.asarray(index)
+    if index.ndim == 1 and len(index) and (np.diff(index) == 1).all():
+        return slice(int(index[0]), int(index[-1]) + 1)
+    return index
 
 
 def make_env(env_id: str, **kwargs) -> gym.Env:

@@ -26,7 +26,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
-from neurocog_gym.envs.base import QuadrupedEnv
+from neurocog_gym.envs.base import QuadrupedEnv, _as_slice
 from neurocog_gym.locomotion.effectivity import Effectivity, EffectivityParams, EffectivityState
 from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
 from neurocog_gym.robot.obstacles import ObstaclePool
@@ -74,6 +74,7 @@ class ObstacleEnv(QuadrupedEnv):
         self.pass_margin = float(pass_margin)
         self.warmup_cycles = int(warmup_cycles)
         self.observation_space = spaces.Dict(self._observation_spaces())
+        self._foot_ix = _as_slice(self.robot.foot_site)
         self.frame = None
         self._frame_origin = None
         self._boxes_source = self._boxes_cache = None
@@ -114,14 +115,20 @@ class ObstacleEnv(QuadrupedEnv):
         return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
 
     def _feet(self) -> np.ndarray:
-        return self.data.site_xpos[self.robot.foot_site]
+        """(4, 3) sole positions, m (a view of ``data.site_xpos`` when the sites are adjacent)."""
+        return self.data.site_xpos[self._foot_ix]
 
     def _sense_and_perceive(self, force_frame: bool = False, yaw: float | None = None) -> None:
-        frame = self.tof.sense(self.data) if force_frame else self.tof.maybe_sense(self.data)
+        # The frame's arrays are the sensor's buffers (read-only views), overwritten by the
+        # next frame: only the latest frame is ever read, and copying it cost ~200 kB a frame.
+        tof, d = self.tof, self.data
+        frame = tof.sense(d, copy=False) if force_frame else tof.maybe_sense(d, copy=False)
         if frame is not None:
             self.frame = frame
-            # The facets face the sensors' mean position: one mean per frame, not per cycle.
-            self._frame_origin = frame.origins.mean(axis=0)
+            # The facets face the sensors' mean position: one mean per frame, not per cycle
+            # (the sum over the sensors divided by their number, as ndarray.mean computes it).
+            origins = frame.origins
+            self._frame_origin = np.add.reduce(origins, axis=0) / origins.shape[0]
         if self.frame is None:
             return
         if yaw is None:
@@ -149,11 +156,13 @@ class ObstacleEnv(QuadrupedEnv):
             boxes[:, 0, 2] = np.maximum(boxes[:, 0, 2], 0.0)
         return boxes
 
-    def _update_effectivity(self, yaw: float | None = None) -> None:
+    def _update_effectivity(
+        self, yaw: float | None = None, touch: np.ndarray | None = None
+    ) -> None:
         d = self.data
         # Read once per cycle and kept for the observation (nothing moves the robot in between).
         self._yaw_now = self._yaw() if yaw is None else yaw
-        self._touch_now = self.touch()
+        self._touch_now = self.touch() if touch is None else touch
         # Fancy indexing already copies feet and hips; the kernel only reads v_body.
         self.eff = self.effectivity.step(
             d.time, self._touch_now, self._feet(), d.xpos[self.robot.hip_body],
@@ -189,10 +198,12 @@ class ObstacleEnv(QuadrupedEnv):
         """Tasks place their obstacles here."""
 
     def _after_physics(self) -> None:
+        # This cycle's touch, read once: placing a block (mj_kinematics) leaves the sensors alone.
+        touch = self._touch_now = self.touch()
         self._task_event()
         yaw = self._yaw()
         self._sense_and_perceive(yaw=yaw)
-        self._update_effectivity(yaw)
+        self._update_effectivity(yaw, touch)
         touching = bool(self.pool.touching(self.data, self.robot.robot_geoms).any())
         if touching and not self._was_touching:
             self.touch_events += 1
@@ -280,11 +291,16 @@ class ObstacleEnv(QuadrupedEnv):
             foothold = (eff.foothold - torso) @ rot.T
             safe = (eff.foothold_safe & eff.path_safe).astype(np.int8)
             mode = int(eff.mode)
-        aef = np.concatenate([[a_h, a_w, a_s], direction.ravel(), obs["joint_pos"], obs["touch"]])
+        # Fig. 7's 31 inputs: the object's size, the interrupt directions, joint angles, touch.
+        aef = np.empty(AEF_INPUTS, np.float32)
+        aef[0:3] = (a_h, a_w, a_s)
+        aef[3:15] = direction.ravel()
+        aef[15:27] = obs["joint_pos"]
+        aef[27:31] = obs["touch"]
         obs.update(
             objects=objects,
             objects_mask=mask,
-            aef_input=aef.astype(np.float32),
+            aef_input=aef,
             aef_mode=mode,
             foothold=foothold.astype(np.float32),
             foothold_safe=safe,

@@ -115,7 +115,7 @@ class SuddenObstacleEnv(ObstacleEnv):
     def _task_event(self) -> None:
         if self.appeared_at is not None:
             return  # one sudden obstacle per episode
-        touch = self.touch()
+        touch = self._touch_now  # read at the start of this cycle's _after_physics
         down = touch[list(FRONT_LEGS)] > self.effectivity.p.touch_off
         # A lift-off is the sole unloading while the CPG swings that leg: the touch signal alone
         # also drops for a cycle in mid-stance (a planted foot's contact flickers), and half of

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from numba import njit
 
 N_SLOTS = 6
 PARK_Z = -1.0
@@ -171,16 +172,30 @@ class ObstaclePool:
             self._is_robot = np.zeros(self._ngeom, dtype=bool)
             self._is_robot[np.asarray(robot_geoms)] = True
             self._robot_ref = robot_geoms
-        geom = data.contact.geom[:n]  # (n, 2) geom ids of each contact
-        slot = self._slot_of[geom]
-        if slot.max() < 0:
-            return hit  # no contact involves a block
-        robot = self._is_robot[geom]
-        # A block touches the robot when the other geom of one of its contacts is the robot's.
-        for s, other in ((slot[:, 0], robot[:, 1]), (slot[:, 1], robot[:, 0])):
-            s = s[other & (s >= 0) & (s < len(self.blocks))]
-            hit[s] = True
+        # (n, 2) geom ids of each contact
+        _touching_kernel(data.contact.geom[:n], self._slot_of, self._is_robot, len(hit), hit)
         return hit
+
+
+@njit(cache=True)
+def _touching_kernel(geom, slot_of, is_robot, n_blocks, hit):  # pragma: no cover - compiled
+    """Mark ``hit[k]`` for each block slot k < ``n_blocks`` with a contact against a robot geom.
+
+    Args:
+        geom: (n, 2) int geom ids of each contact.
+        slot_of: (ngeom,) int64 block slot of each geom, -1 for the rest.
+        is_robot: (ngeom,) bool, whether each geom is the robot's.
+        n_blocks: number of placed blocks.
+        hit: (K,) bool, written.
+    """
+    for c in range(geom.shape[0]):
+        g0, g1 = geom[c, 0], geom[c, 1]
+        s0, s1 = slot_of[g0], slot_of[g1]
+        # A block touches the robot when the other geom of one of its contacts is the robot's.
+        if 0 <= s0 < n_blocks and is_robot[g1]:
+            hit[s0] = True
+        if 0 <= s1 < n_blocks and is_robot[g0]:
+            hit[s1] = True
 
 
 def random_block(

@@ -335,8 +335,9 @@ class ToFArray:
 
         Args:
             data: simulation state with current kinematics.
-            copy: if True the frame owns its arrays; if False they are views into buffers that
-                the next ``sense`` overwrites (no allocation beyond the frame object).
+            copy: if True the frame owns its arrays; if False they are read-only views into
+                buffers that the next ``sense`` overwrites (no allocation beyond the frame
+                object).
 
         Returns:
             The frame.
@@ -415,6 +416,11 @@ class ToFArray:
         )
         if copy:
             arrays = tuple(a.copy() for a in arrays)
+        else:
+            # Views of the buffers: read-only, so that only the next frame changes them.
+            arrays = tuple(a.view() for a in arrays)
+            for a in arrays:
+                a.flags.writeable = False
         return ToFFrame(*arrays, time=float(data.time))
 
 
