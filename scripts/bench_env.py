@@ -38,7 +38,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from benchlib import machine  # noqa: E402
+from benchlib import field_doc, machine  # noqa: E402
 
 import neurocog_gym  # noqa: F401  (registers the env ids)
 
@@ -81,10 +81,11 @@ def parse_args(argv: list[str] | None = None) -> Args:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for f in dataclasses.fields(Args):
         name = "--" + f.name.replace("_", "-")
+        help_ = f"{field_doc(__file__, f.name)} (default {f.default!r})"
         if f.name == "bench_runs":
-            parser.add_argument(name, nargs="*", default=[])
+            parser.add_argument(name, nargs="*", default=[], help=help_)
         else:
-            parser.add_argument(name, type=type(f.default), default=f.default)
+            parser.add_argument(name, type=type(f.default), default=f.default, help=help_)
     ns = vars(parser.parse_args(argv))
     ns["bench_runs"] = tuple(ns["bench_runs"])
     args = Args(**ns)

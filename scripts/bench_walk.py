@@ -45,7 +45,7 @@ import mujoco
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine  # noqa: E402
+from benchlib import field_doc, machine  # noqa: E402
 
 import neurocog_gym  # noqa: F401  (registers the env ids)
 from neurocog_gym.robot.names import LEGS
@@ -79,8 +79,9 @@ def parse_args(argv: list[str] | None = None) -> Args:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for f in dataclasses.fields(Args):
         parser.add_argument(
-            "--" + f.name.replace("_", "-"), type=type(f.default), default=f.default
-        )
+            "--" + f.name.replace("_", "-"), type=type(f.default), default=f.default,
+            help=f"{field_doc(__file__, f.name)} (default {f.default!r})",
+        )  # fmt: skip
     ns = parser.parse_args(argv)
     args = Args(**vars(ns))
     if args.seeds < 1 or args.steps < 1 or args.rounds < 1 or args.provision_seeds < 0:

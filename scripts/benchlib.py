@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 import os
 import platform
+import re
 from pathlib import Path
 
 _DISPLAY = {
@@ -45,3 +46,10 @@ def machine(*packages: str, pinned: bool = False) -> str:
     for name in packages:
         parts.append(f"{_DISPLAY.get(name, name)} {importlib.import_module(name).__version__}")
     return f"{cpu_model()}, {cpus}, {platform.system()} {platform.release()}; " + ", ".join(parts)
+
+
+def field_doc(source: str | os.PathLike, name: str) -> str:
+    """The docstring under the dataclass field ``name`` in the file ``source`` (for --help)."""
+    src = Path(source).read_text()
+    m = re.search(rf"^    {name}: [^\n]*\n    \"\"\"(.*?)\"\"\"", src, flags=re.M | re.S)
+    return " ".join(m.group(1).split()).replace("%", "%%") if m else ""

@@ -37,6 +37,9 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import field_doc  # noqa: E402
+
 
 @dataclasses.dataclass(frozen=True)
 class Args:
@@ -106,7 +109,7 @@ def parse_args(argv: list[str] | None = None) -> Args:
     )
     for f in dataclasses.fields(Args):
         name = "--" + f.name.replace("_", "-")
-        help_ = _field_doc(f.name).replace("%", "%%")  # argparse formats help with %
+        help_ = field_doc(__file__, f.name)
         if isinstance(f.default, bool):
             parser.add_argument(name, action=argparse.BooleanOptionalAction, default=f.default,
                                 help=help_)  # fmt: skip
@@ -125,13 +128,6 @@ def parse_args(argv: list[str] | None = None) -> Args:
     except ValueError:
         parser.error(f"--net-arch must be comma-separated positive integers, got {args.net_arch!r}")
     return args
-
-
-def _field_doc(name: str) -> str:
-    """The docstring under a dataclass field (read from this file's source)."""
-    src = Path(__file__).read_text()
-    m = re.search(rf"^    {name}: [^\n]*\n    \"\"\"(.*?)\"\"\"", src, flags=re.M | re.S)
-    return " ".join(m.group(1).split()) if m else ""
 
 
 def _net_arch(text: str) -> list[int]:
