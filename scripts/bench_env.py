@@ -506,7 +506,15 @@ def part_profile(args: Args) -> list[str]:
     default_ms, default = _section_profile(None, args.profile_steps)
     full_ms, full = _section_profile(ToFParams.at_scale(1.0, backend="numba"), args.profile_steps)
     load1 = load_average()
-    keys = sorted(default, key=lambda k: -default[k])
+    # Top-level stages by time, each followed by the stages inside it ("  of which ...").
+    parent = {
+        "  of which DD-GNG learning cycle (net.update)": "attention pipeline step "
+        "(perception/pipeline.py)",
+        "  of which proprioception (envs/base.py)": "observation (envs/obstacle.py _get_obs)",
+    }
+    keys = []
+    for k in sorted((k for k in default if k not in parent), key=lambda k: -default[k]):
+        keys += [k] + sorted((c for c in default if parent.get(c) == k), key=lambda c: -default[c])
     lines = [
         "### Where an obstacle-env step goes",
         "",

@@ -263,7 +263,10 @@ class ObstacleEnv(QuadrupedEnv):
             return out, mask, best
         torso = self.data.xpos[self.robot.torso_body]
         rel = [rot @ (o.position - torso) for o in objs]
-        order = np.argsort([np.hypot(r[0], r[1]) + (10 if r[0] < 0 else 0) for r in rel])
+        if len(objs) == 1:
+            order = (0,)  # the usual case: nothing to sort
+        else:
+            order = np.argsort([np.hypot(r[0], r[1]) + (10 if r[0] < 0 else 0) for r in rel])
         for slot, k in enumerate(order[:N_OBJECTS]):
             o = objs[k]
             out[slot] = (*rel[k], o.height, o.width, o.length, o.gamma, o.density)
@@ -277,7 +280,7 @@ class ObstacleEnv(QuadrupedEnv):
         obs = self._proprioception(self._touch_now)
         yaw = self._yaw() if self._yaw_now is None else self._yaw_now
         c, s = np.cos(yaw), np.sin(yaw)
-        rot = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+        rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
         objects, mask, (a_h, a_w, a_s) = self._objects(rot)
         eff = self.eff
         torso = self.data.xpos[self.robot.torso_body]
