@@ -1252,3 +1252,127 @@ def refine_objects_kernel(
             gmin = min(gmin, bg[i])
         out[k, 8] = gmin
     return out
+
+
+@njit(cache=True)
+def view_walls_kernel(points, ground, tol, fx, fy, origin, nbins, umax, cut, min_width, min_points):
+    """Surfaces cut off by the top of the view across a wide azimuth span (pipeline ``view_wall``).
+
+    Per azimuth bin (as in ``refine_objects_kernel``), the upper edge of the view is the largest
+    tan(elevation) seen from ``origin``; a point is *cut off* when it is higher than ``tol``
+    above ``ground`` and within ``cut`` of that edge: the surface it lies on rises out of
+    sight. On a bare floor the view's upper edge is floor (z ≈ 0), so no point is cut off; a
+    box whose top is in sight has the floor behind it above it in the view. Runs of
+    consecutive bins holding cut-off points are candidate surfaces; a run whose cut-off points
+    span at least ``min_width`` across the walking direction, with at least ``min_points``
+    points, is returned.
+
+    Args:
+        points: (N, 3) float32 or float64, metres, the frame.
+        ground: metres, the ground level.
+        tol: metres, cut-off points are higher than ground + tol.
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        origin: (3,) float64, metres, the sensors' position.
+        nbins: azimuth bins of the view's upper edge.
+        umax: the bins cover tan(azimuth) in [-umax, umax] about the walking direction.
+        cut: tan(elevation) distance to the view's edge within which a point is cut off.
+        min_width: metres, smallest span across the walking direction of a returned run.
+        min_points: fewest cut-off points of a returned run.
+
+    Returns:
+        (R, 11) float64, one row per run: points, top height above ground, min x, min y,
+        max x, max y, mean x, mean y, mean z, across-extent, along-extent.
+    """
+    n = points.shape[0]
+    thr = ground + tol
+    of = origin[0] * fx + origin[1] * fy
+    ol = origin[1] * fx - origin[0] * fy
+    oz = origin[2]
+    # Most frames (a floor, a low block) hold fewer raised points than a run needs: done.
+    n_high = 0
+    for i in range(n):
+        n_high += points[i, 2] > thr
+    if n_high < min_points:
+        return np.empty((0, 11))
+    scale = nbins / (2.0 * umax)
+    slope = np.empty(n)
+    q = np.empty(n)
+    _view_slopes(points, fx, fy, of, ol, oz, umax, scale, slope, q)
+    edge = np.full(nbins, -np.inf)
+    bb = np.empty(n, np.int32)
+    for i in range(n):
+        pf = points[i, 0] * fx + points[i, 1] * fy
+        if not (pf - of > 1e-6 and abs(points[i, 2]) < 1e4):
+            bb[i] = -1
+            continue
+        b = min(max(int(q[i]), 0), nbins - 1)
+        bb[i] = b
+        if slope[i] > edge[b]:
+            edge[b] = slope[i]
+    # Per bin: count, top z, x/y box, sums, across and along extents of the cut-off points.
+    acc = np.zeros((nbins, 13))
+    for b in range(nbins):
+        acc[b, 1] = -np.inf
+        acc[b, 2] = np.inf
+        acc[b, 3] = np.inf
+        acc[b, 4] = -np.inf
+        acc[b, 5] = -np.inf
+        acc[b, 9] = np.inf
+        acc[b, 10] = -np.inf
+        acc[b, 11] = np.inf
+        acc[b, 12] = -np.inf
+    for i in range(n):
+        z = points[i, 2]
+        b = bb[i]
+        if not (z > thr and b >= 0 and edge[b] - slope[i] <= cut):
+            continue
+        x = points[i, 0]
+        y = points[i, 1]
+        pf = x * fx + y * fy
+        pl = y * fx - x * fy
+        acc[b, 0] += 1.0
+        acc[b, 1] = max(acc[b, 1], z)
+        acc[b, 2] = min(acc[b, 2], x)
+        acc[b, 3] = min(acc[b, 3], y)
+        acc[b, 4] = max(acc[b, 4], x)
+        acc[b, 5] = max(acc[b, 5], y)
+        acc[b, 6] += x
+        acc[b, 7] += y
+        acc[b, 8] += z
+        acc[b, 9] = min(acc[b, 9], pl)
+        acc[b, 10] = max(acc[b, 10], pl)
+        acc[b, 11] = min(acc[b, 11], pf)
+        acc[b, 12] = max(acc[b, 12], pf)
+    out = np.empty((nbins, 11))
+    r = 0
+    b = 0
+    while b < nbins:
+        if acc[b, 0] == 0.0:
+            b += 1
+            continue
+        run = acc[b].copy()
+        b += 1
+        while b < nbins and acc[b, 0] > 0.0:
+            run[0] += acc[b, 0]
+            for c in (1, 4, 5, 10, 12):
+                run[c] = max(run[c], acc[b, c])
+            for c in (2, 3, 9, 11):
+                run[c] = min(run[c], acc[b, c])
+            for c in (6, 7, 8):
+                run[c] += acc[b, c]
+            b += 1
+        if run[0] >= min_points and run[10] - run[9] >= min_width:
+            out[r, 0] = run[0]
+            out[r, 1] = run[1] - ground
+            out[r, 2] = run[2]
+            out[r, 3] = run[3]
+            out[r, 4] = run[4]
+            out[r, 5] = run[5]
+            out[r, 6] = run[6] / run[0]
+            out[r, 7] = run[7] / run[0]
+            out[r, 8] = run[8] / run[0]
+            out[r, 9] = run[10] - run[9]
+            out[r, 10] = run[12] - run[11]
+            r += 1
+    return out[:r]
