@@ -90,10 +90,11 @@ def test_many_raised_facets_never_overflow_the_label_table():
 # -- raw-point sizes ----------------------------------------------------------------------
 
 
-def _refine(points, boxes, origin=ORIGIN, fwd=(1.0, 0.0)):
+def _refine(points, boxes, origin=ORIGIN, fwd=(1.0, 0.0), noise_ring=0.0):
     return _k.refine_objects_kernel(
         np.ascontiguousarray(points), np.ascontiguousarray(boxes, dtype=np.float64), 0.0, 0.02,
         0.04, fwd[0], fwd[1], 4, 0.0, 0.9, 0.03, np.asarray(origin, dtype=np.float64), 64, 4.0,
+        noise_ring, np.random.default_rng(0).standard_normal((64, 512)),
     )  # fmt: skip
 
 
@@ -134,6 +135,47 @@ def test_refine_flags_a_surface_cut_off_by_the_top_of_the_view():
     pts = np.concatenate([floor, wall]).astype(np.float32)
     row = _refine(pts, [[[0.95, -0.1, 0.0], [1.0, 0.1, 0.06]]])[0]
     assert row[8] == pytest.approx(0.0, abs=1e-9)
+
+
+def _radial_noise(pts, rel, seed=0, origin=ORIGIN):
+    """ToF range noise: each point moved along its ray by rel × its distance (Gaussian)."""
+    d = pts.astype(np.float64) - origin
+    z = np.random.default_rng(seed).standard_normal((len(pts), 1))
+    return (origin + d * (1.0 + rel * z)).astype(np.float32)
+
+
+def test_noise_level_reads_the_range_noise_off_the_floor():
+    floor = _box_cloud((0.5, -0.1, 0.0), (0.7, 0.05, 0.07))
+    floor = floor[floor[:, 2] <= 0.0]
+    scratch = np.empty(len(floor))
+    for rel in (0.0, 0.005, 0.01, 0.02):
+        pts = _radial_noise(floor, rel)
+        sig = _k._noise_level(
+            pts, 0.0, 0.02, 1.0, 0.0, ORIGIN[2], 0.5, 0.7, -0.1, 0.05, 0.2, 0.04, scratch
+        )
+        assert sig == pytest.approx(rel, rel=0.1, abs=1e-12)
+
+
+def test_refine_takes_the_noise_overshoot_out_of_a_dense_noisy_extent():
+    lo, hi = (0.5, -0.1, 0.0), (0.7, 0.05, 0.07)
+    clean = _box_cloud(lo, hi, spacing=0.004)
+    box = [[[0.58, -0.04, 0.0], [0.62, 0.0, 0.07]]]
+    # Noise-free: the correction finds no noise and changes nothing.
+    off, on = _refine(clean, box)[0], _refine(clean, box, noise_ring=0.15)[0]
+    assert on[9] == 0.0 and np.array_equal(off[:9], on[:9])
+    errs_off, errs_on = [], []
+    for seed in range(5):
+        noisy = _radial_noise(clean, 0.01, seed)
+        off, on = _refine(noisy, box)[0], _refine(noisy, box, noise_ring=0.15)[0]
+        assert on[9] == pytest.approx(0.01, rel=0.15)
+        assert on[3] <= off[3] and on[2] <= off[2]  # ends only ever move inwards
+        errs_off.append(off[3] - 0.20)
+        errs_on.append(on[3] - 0.20)
+    # The outermost of the many noisy points on the faces at both ends (this cloud has all
+    # four sides) overshoot the 20 cm length by ~3.7 cm; the correction takes about half of it
+    # out (a quadratic SIMEX extrapolation of a maximum under-corrects).
+    assert np.median(errs_off) > 0.02
+    assert 0.0 < np.median(errs_on) < 0.65 * np.median(errs_off)
 
 
 def _wall_foot_cloud(wall_y=(-0.5, 0.5), seen=0.06):
