@@ -1126,43 +1126,39 @@ _NOISE_SAMPLE = 512
 
 
 @njit(cache=True)
-def _noise_level(points, ground, tol, fx, fy, oz, f0, f1, l0, l1, ring, margin, zs):
-    """Range noise σ/d of the sensors, estimated on the floor round an object.
+def noise_level_kernel(points, ground, tol, oz):
+    """Range noise σ/d of the sensors, estimated on the floor of a frame.
 
     A range error δ = σ d along a ray moves a floor point's height by σ (oz - z), whatever its
-    distance (d and the ray's drop scale together), so (z - median z) / (oz - z) over the floor
+    distance (d and the ray's drop scale together), so (z - median z) / (oz - z) over floor
     points (within ``tol`` of ``ground``) has spread σ; its median absolute deviation × 1.4826
-    estimates σ, 0 on a noise-free frame. The points taken lie in the ring between the object's
-    extent ``f0..f1`` × ``l0..l1`` (walking frame) grown by ``margin`` (its sides' lowest ``tol``
-    are not floor) and grown by ``ring``. ``zs`` is scratch (≥ N).
+    estimates σ (0 on a noise-free frame; the few points of walls' and objects' lowest ``tol``
+    do not move a median). Up to ``_NOISE_SAMPLE`` floor points are taken, evenly through the
+    frame; fewer than ``_NOISE_MIN_POINTS`` give 0.
+
+    Args:
+        points: (N, 3) float32 or float64, metres, the frame.
+        ground: metres, the ground level.
+        tol: metres, floor points lie within this of ``ground``.
+        oz: metres, the sensors' height.
     """
+    n = points.shape[0]
+    step = max(1, n // (2 * _NOISE_SAMPLE))
+    zs = np.empty(_NOISE_SAMPLE)
     m = 0
-    for i in range(points.shape[0]):
+    for i in range(0, n, step):
         z = points[i, 2]
-        if not abs(z - ground) <= tol:
-            continue
-        x = points[i, 0]
-        y = points[i, 1]
-        pf = x * fx + y * fy
-        pl = y * fx - x * fy
-        if not (pf >= f0 - ring and pf <= f1 + ring and pl >= l0 - ring and pl <= l1 + ring):
-            continue
-        if not (
-            pf >= f0 - margin and pf <= f1 + margin and pl >= l0 - margin and pl <= l1 + margin
-        ):
+        if abs(z - ground) <= tol and oz - z > 1e-3:
             zs[m] = z
             m += 1
+            if m == _NOISE_SAMPLE:
+                break
     if m < _NOISE_MIN_POINTS:
         return 0.0
-    # At most _NOISE_SAMPLE of them, evenly through the frame order (three medians follow).
-    step = (m + _NOISE_SAMPLE - 1) // _NOISE_SAMPLE
-    m = (m + step - 1) // step
-    for i in range(m):
-        zs[i] = zs[i * step]
     zmed = np.median(zs[:m])
     rel = np.empty(m)
     for i in range(m):
-        rel[i] = (zs[i] - zmed) / max(oz - zs[i], 1e-3)
+        rel[i] = (zs[i] - zmed) / (oz - zs[i])
     med = np.median(rel)
     for i in range(m):
         rel[i] = abs(rel[i] - med)
@@ -1225,9 +1221,55 @@ def _simex_end(values, cnt, sign, o, end, sig, spacing, draws):
 
 
 @njit(cache=True)
+def view_edge_kernel(points, fx, fy, origin, nbins, umax):
+    """The upper edge of the view per azimuth bin, and each point's elevation and bin.
+
+    Seen from ``origin``, a point's tan(elevation) is (z - origin z) / its horizontal distance
+    and its bin the truncated (tan(azimuth) + ``umax``) × ``nbins`` / (2 ``umax``) about the
+    walking direction, clamped to the end bins; the edge of a bin is the largest tan(elevation)
+    in it. Points level with or behind the sensors (along the walking direction), or absurdly
+    high, get bin -1 and no edge. Shared by ``refine_objects_kernel`` and
+    ``view_walls_kernel`` (one pass per frame).
+
+    Returns:
+        ``(slope, bins, edge)``: (N,) float64, (N,) int64, (nbins,) float64 (-inf: empty bin).
+    """
+    n = points.shape[0]
+    of = origin[0] * fx + origin[1] * fy
+    ol = origin[1] * fx - origin[0] * fy
+    oz = origin[2]
+    scale = nbins / (2.0 * umax)
+    slope = np.empty(n)
+    q = np.empty(n)
+    _view_slopes(points, fx, fy, of, ol, oz, umax, scale, slope, q)
+    edge = np.full(nbins, -np.inf)
+    bins = np.empty(n, np.int64)
+    for i in range(n):
+        pf = points[i, 0] * fx + points[i, 1] * fy
+        if not (pf - of > 1e-6 and abs(points[i, 2]) < 1e4):
+            bins[i] = -1
+            continue
+        b = int(q[i])
+        b = min(max(b, 0), nbins - 1)
+        bins[i] = b
+        if slope[i] > edge[b]:
+            edge[b] = slope[i]
+    return slope, bins, edge
+
+
+@njit(cache=True)
+def count_above(points, thr):
+    """Number of points higher than ``thr`` (metres)."""
+    c = 0
+    for i in range(points.shape[0]):
+        c += points[i, 2] > thr
+    return c
+
+
+@njit(cache=True)
 def refine_objects_kernel(
-    points, boxes, ground, tol, margin, fx, fy, iters, q_lo, q_top, gap, origin, nbins, umax,
-    noise_ring, draws,
+    points, boxes, ground, tol, margin, fx, fy, iters, q_lo, q_top, gap, origin, slope, bins,
+    edge, noise, draws,
 ):  # fmt: skip
     """Object sizes from the raw frame points round each object (pipeline ``refine``).
 
@@ -1252,11 +1294,11 @@ def refine_objects_kernel(
         gap: metres; after the quantile cut, an end point farther than this from the next
             point inwards is dropped, and so on (isolated stray points: range noise).
         origin: (3,) float64, metres, the sensors' position.
-        nbins: azimuth bins of the view's upper edge.
-        umax: the bins cover tan(azimuth) in [-umax, umax] about the walking direction.
-        noise_ring: metres; > 0 estimates the range noise on the floor within this of the
-            extent and moves each end whose noise exceeds the point spacing back by its
-            expected overshoot (``_noise_level``, ``_simex_end``); 0 = off.
+        slope: (N,) float64, each point's tan(elevation) (``view_edge_kernel``).
+        bins: (N,) int64, each point's azimuth bin, -1 to skip it (``view_edge_kernel``).
+        edge: (nbins,) float64, the view's upper edge per bin (``view_edge_kernel``).
+        noise: range noise σ/d (``noise_level_kernel``); > 0 moves each end whose noise
+            exceeds the mean point spacing back by its expected overshoot (``_simex_end``).
         draws: (B, D) float64 standard normal draws for ``_simex_end`` (fixed: deterministic).
 
     Returns:
@@ -1264,7 +1306,7 @@ def refine_objects_kernel(
         the extent as along-min, along-max, across-min, across-max, the smallest distance
         (in tan(elevation) seen from ``origin``) of an object point below the upper edge of the
         view in its azimuth bin: near 0 when the view cuts the surface off (a wall whose top is
-        out of sight), and the range noise σ/d estimated round it (0 without ``noise_ring``).
+        out of sight), and the ``noise`` used.
         A row with 0 points is left at NaN.
     """
     n = points.shape[0]
@@ -1276,27 +1318,18 @@ def refine_objects_kernel(
     hl = np.empty(n)
     hs = np.empty(n)
     hb = np.empty(n, np.int64)
-    edge = np.full(nbins, -np.inf)
     of = origin[0] * fx + origin[1] * fy
     ol = origin[1] * fx - origin[0] * fy
-    oz = origin[2]
-    scale = nbins / (2.0 * umax)
-    slope = np.empty(n)
-    q = np.empty(n)
-    _view_slopes(points, fx, fy, of, ol, oz, umax, scale, slope, q)
     m = 0
     for i in range(n):
+        b = bins[i]
+        if b < 0:
+            continue
         x = points[i, 0]
         y = points[i, 1]
         z = points[i, 2]
         pf = x * fx + y * fy
         pl = y * fx - x * fy
-        if not (pf - of > 1e-6 and abs(z) < 1e4):
-            continue
-        b = int(q[i])
-        b = min(max(b, 0), nbins - 1)
-        if slope[i] > edge[b]:
-            edge[b] = slope[i]
         if z > thr:
             hz[m] = z
             hf[m] = pf
@@ -1310,7 +1343,6 @@ def refine_objects_kernel(
     bg = np.empty(max(m, 1))
     low = np.empty(_N_ENDS)
     high = np.empty(_N_ENDS)
-    fz = np.empty(n if noise_ring > 0.0 else 1)
     for k in range(k_n):
         # The box's ground-plane corners in the walking frame.
         f0 = np.inf
@@ -1351,11 +1383,7 @@ def refine_objects_kernel(
             f0, f1, l0, l1 = nf0, nf1, nl0, nl1
         if cnt == 0:
             continue
-        sig = 0.0
-        if noise_ring > 0.0:
-            sig = _noise_level(
-                points, ground, tol, fx, fy, oz, f0, f1, l0, l1, noise_ring, margin, fz
-            )
+        sig = noise
         if sig > 0.0:
             sp = np.sqrt(max(f1 - f0, 0.0) * max(l1 - l0, 0.0) / cnt)
             nf0 = -_simex_end(bf, cnt, -1.0, of, -f0, sig, sp, draws)
@@ -1380,11 +1408,11 @@ def refine_objects_kernel(
 
 
 @njit(cache=True)
-def view_walls_kernel(points, ground, tol, fx, fy, origin, nbins, umax, cut, min_width, min_points):
+def view_walls_kernel(points, ground, tol, fx, fy, slope, bins, edge, cut, min_width, min_points):
     """Surfaces cut off by the top of the view across a wide azimuth span (pipeline ``view_wall``).
 
-    Per azimuth bin (as in ``refine_objects_kernel``), the upper edge of the view is the largest
-    tan(elevation) seen from ``origin``; a point is *cut off* when it is higher than ``tol``
+    Per azimuth bin (``view_edge_kernel``), the upper edge of the view is the largest
+    tan(elevation) seen from the sensors; a point is *cut off* when it is higher than ``tol``
     above ``ground`` and within ``cut`` of that edge: the surface it lies on rises out of
     sight. On a bare floor the view's upper edge is floor (z ≈ 0), so no point is cut off; a
     box whose top is in sight has the floor behind it above it in the view. Runs of
@@ -1398,9 +1426,9 @@ def view_walls_kernel(points, ground, tol, fx, fy, origin, nbins, umax, cut, min
         tol: metres, cut-off points are higher than ground + tol.
         fx: x of the unit walking direction in the ground plane.
         fy: y of the unit walking direction in the ground plane.
-        origin: (3,) float64, metres, the sensors' position.
-        nbins: azimuth bins of the view's upper edge.
-        umax: the bins cover tan(azimuth) in [-umax, umax] about the walking direction.
+        slope: (N,) float64, each point's tan(elevation) (``view_edge_kernel``).
+        bins: (N,) int64, each point's azimuth bin, -1 to skip it (``view_edge_kernel``).
+        edge: (nbins,) float64, the view's upper edge per bin (``view_edge_kernel``).
         cut: tan(elevation) distance to the view's edge within which a point is cut off.
         min_width: metres, smallest span across the walking direction of a returned run.
         min_points: fewest cut-off points of a returned run.
@@ -1410,31 +1438,8 @@ def view_walls_kernel(points, ground, tol, fx, fy, origin, nbins, umax, cut, min
         max x, max y, mean x, mean y, mean z, across-extent, along-extent.
     """
     n = points.shape[0]
+    nbins = edge.shape[0]
     thr = ground + tol
-    of = origin[0] * fx + origin[1] * fy
-    ol = origin[1] * fx - origin[0] * fy
-    oz = origin[2]
-    # Most frames (a floor, a low block) hold fewer raised points than a run needs: done.
-    n_high = 0
-    for i in range(n):
-        n_high += points[i, 2] > thr
-    if n_high < min_points:
-        return np.empty((0, 11))
-    scale = nbins / (2.0 * umax)
-    slope = np.empty(n)
-    q = np.empty(n)
-    _view_slopes(points, fx, fy, of, ol, oz, umax, scale, slope, q)
-    edge = np.full(nbins, -np.inf)
-    bb = np.empty(n, np.int32)
-    for i in range(n):
-        pf = points[i, 0] * fx + points[i, 1] * fy
-        if not (pf - of > 1e-6 and abs(points[i, 2]) < 1e4):
-            bb[i] = -1
-            continue
-        b = min(max(int(q[i]), 0), nbins - 1)
-        bb[i] = b
-        if slope[i] > edge[b]:
-            edge[b] = slope[i]
     # Per bin: count, top z, x/y box, sums, across and along extents of the cut-off points.
     acc = np.zeros((nbins, 13))
     for b in range(nbins):
@@ -1449,7 +1454,7 @@ def view_walls_kernel(points, ground, tol, fx, fy, origin, nbins, umax, cut, min
         acc[b, 12] = -np.inf
     for i in range(n):
         z = points[i, 2]
-        b = bb[i]
+        b = bins[i]
         if not (z > thr and b >= 0 and edge[b] - slope[i] <= cut):
             continue
         x = points[i, 0]

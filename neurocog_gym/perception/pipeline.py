@@ -24,13 +24,13 @@ fall short of a block's edges by about half a node spacing each side — 10–13
 sparse nets of Table 2 (``scripts/bench_affordance_accuracy.py``). On dense noisy frames the
 outermost points overshoot instead: among hundreds of points near an edge, the ones whose range
 noise carried them farthest set the extent (+1.2 cm median on the length at the ToF's full
-resolution with 1 % noise). ``refine_noise_ring`` estimates the range noise from the floor round
-the object and, at each end where that noise exceeds the mean point spacing, takes the expected
-overshoot out (simulation-extrapolation); a noise-free frame is left as it was, and so are
-ends whose point spacing exceeds their noise (the boxes at the default 56 × 43 resolution,
-where the outermost sample falls short of the edge by about half a spacing and the noise
-mostly fills that gap: correcting there too lowered "all three" from 89 % to 85 %, the noise-free
-figure, re-measured offline on the benchmark's end-state frames). Two checks ride on it:
+resolution with 1 % noise). ``refine_noise`` estimates the range noise from the frame's floor
+and, at each end where that noise exceeds the mean point spacing, takes the expected overshoot
+out (simulation-extrapolation); a noise-free frame is left as it was, and so are ends whose
+point spacing exceeds their noise (the boxes at the default 56 × 43 resolution, where the
+outermost sample falls short of the edge by about half a spacing and the noise mostly fills that
+gap: correcting there too lowered "all three" from 89 % to 85 %, the noise-free figure,
+re-measured offline on the benchmark's end-state frames). Two checks ride on it:
 
 * ``verify``: an object without a single raw point above the ground tolerance round it is a
   graph artefact (a node behind a new block, pulled up by the points on its top) and is
@@ -76,7 +76,7 @@ from neurocog_gym.perception.gng import DDGNG, GNG, MLGNG, DDGNGParams
 GNG_KINDS = {"ddgng": DDGNG, "gng": GNG, "mlgng": MLGNG}
 
 _NOISE_DRAWS = np.random.default_rng(0).standard_normal((64, 512))
-"""Fixed standard normal draws of the noise-overshoot estimate (``refine_noise_ring``)."""
+"""Fixed standard normal draws of the noise-overshoot estimate (``refine_noise``)."""
 _NOISE_DRAWS.flags.writeable = False
 
 
@@ -116,15 +116,14 @@ class PipelineParams:
     refine_gap: float = 0.03
     """m: an extent's end point farther than this from the next point inwards is a stray
     point (range noise) and dropped, repeatedly."""
-    refine_noise_ring: float = 0.15
-    """m: the range noise is estimated on the floor within this of an object's raw-point extent,
-    and each end whose noise exceeds the mean point spacing is moved back by the outermost noisy
-    points' expected overshoot (``refine_objects_kernel``; 0 = off). No effect on a noise-free
-    frame. ``scripts/bench_affordance_accuracy.py --scale 1.0 --scenes 50``, 1 % noise: length
-    error +1.2 cm → +0.6 cm (median), "all three" 84 % → 94 % (noise-free: 94 %); at the default
-    resolution the boxes' measures are unchanged (100 scenes), only dense wall-foot strips
-    trigger it. Cost per cycle with objects: ~30–40 µs at 56 × 43, ~0.5–0.7 ms at full
-    resolution."""
+    refine_noise: bool = True
+    """Noise-aware extent ends: the range noise σ/d is estimated on the frame's floor points
+    (``noise_level_kernel``) and each end whose noise exceeds the mean point spacing is moved
+    back by the outermost noisy points' expected overshoot (``refine_objects_kernel``). No
+    effect on a noise-free frame. ``scripts/bench_affordance_accuracy.py --scale 1.0 --scenes
+    50``, 1 % noise: length error +1.2 cm → +0.6 cm (median), "all three" 84 % → 94 %
+    (noise-free: 94 %); at the default resolution the boxes' measures are unchanged (100
+    scenes), only dense wall-foot strips trigger it."""
     refine_edge: float = 1.0
     """Edge correction: each end of an extent moves out by this × half the mean raw-point
     spacing on the object, sqrt(footprint / points); 0 = off."""
@@ -145,6 +144,43 @@ def _overlap(a, b) -> bool:
         a0[0] <= b1[0] and a0[1] <= b1[1] and a0[2] <= b1[2]
         and b0[0] <= a1[0] and b0[1] <= a1[1] and b0[2] <= a1[2]
     )  # fmt: skip
+
+
+class _Frame:
+    """One step's raw-point inputs, checked once.
+
+    The frame, the walking direction, the sensors' position, and the view's upper edge
+    (``view_edge_kernel``), computed on first use and shared by the raw-point steps.
+    """
+
+    __slots__ = ("pts", "fx", "fy", "origin", "view_cache")
+
+    def __init__(self, pts, fx, fy, origin):
+        self.pts, self.fx, self.fy, self.origin = pts, fx, fy, origin
+        self.view_cache = None
+
+    def view(self):
+        if self.view_cache is None:
+            self.view_cache = _k.view_edge_kernel(self.pts, self.fx, self.fy, self.origin, 64, 4.0)
+        return self.view_cache
+
+
+def _frame_inputs(aff: Affordances, points, forward, sensor_origin) -> _Frame | None:
+    """The checked inputs of the raw-point steps, or None when they cannot run."""
+    pts = np.asarray(points)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not math.isfinite(aff.ground_z):
+        return None
+    if pts.dtype not in (np.float32, np.float64) or not pts.flags.c_contiguous:
+        pts = np.ascontiguousarray(pts, dtype=np.float64)
+    fwd = np.asarray(forward, dtype=np.float64).reshape(-1)
+    h = float(np.hypot(fwd[0], fwd[1]))
+    if not h > 1e-9:
+        return None
+    origin = np.asarray(sensor_origin, dtype=np.float64).reshape(-1)
+    if origin.shape != (3,) or not all(map(math.isfinite, origin.tolist())):
+        return None
+    # Python floats, not NumPy scalars: the box arithmetic is scalar.
+    return _Frame(pts, float(fwd[0]) / h, float(fwd[1]) / h, origin)
 
 
 class AttentionPipeline:
@@ -215,10 +251,13 @@ class AttentionPipeline:
             forward=forward, ground_z=ground_z,
         )  # fmt: skip
         t2 = time.perf_counter()
-        if self.params.refine and aff.obstacles:
-            aff = self._refine(aff, points, forward, sensor_origin)
-        if self.params.refine and self.params.view_wall_width > 0.0 and self.params.view_cut >= 0:
-            aff = self._view_walls(aff, points, forward, sensor_origin)
+        walls = self.params.view_wall_width > 0.0 and self.params.view_cut >= 0.0
+        if self.params.refine and (aff.obstacles or walls):
+            frame = _frame_inputs(aff, points, forward, sensor_origin)
+            if frame is not None and aff.obstacles:
+                aff = self._refine(aff, points, forward, sensor_origin, frame)
+            if frame is not None and walls:
+                aff = self._view_walls(aff, points, forward, sensor_origin, frame)
         t3 = time.perf_counter()
         self._remember(aff, t)
         self.last = aff
@@ -231,36 +270,33 @@ class AttentionPipeline:
         }
         return aff
 
-    def _refine(self, aff: Affordances, points: np.ndarray, forward, sensor_origin) -> Affordances:
+    def _refine(
+        self, aff: Affordances, points: np.ndarray, forward, sensor_origin, frame=None
+    ) -> Affordances:
         """Objects' height, width, length and box from the raw points round them.
 
         The graph finds the objects and says how sure it is (density, ``suspected``); their
         sizes are read on the frame itself ("the raw data around the suspected obstacle are
         processed separately", §4.1): a GNG's nodes sit inside the surface they quantise, so
         node extents fall short of a block's edges by about half a node spacing on each side.
+        ``frame``: the step's :class:`_Frame` (built here if None).
         """
-        pts = np.asarray(points)
-        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not math.isfinite(aff.ground_z):
+        frame = frame or _frame_inputs(aff, points, forward, sensor_origin)
+        if frame is None:
             return aff
-        if pts.dtype not in (np.float32, np.float64) or not pts.flags.c_contiguous:
-            pts = np.ascontiguousarray(pts, dtype=np.float64)
-        fwd = np.asarray(forward, dtype=np.float64).reshape(-1)
-        h = float(np.hypot(fwd[0], fwd[1]))
-        if not h > 1e-9:
-            return aff
-        # Python floats, not NumPy scalars: the box arithmetic below is scalar.
-        fx, fy = float(fwd[0]) / h, float(fwd[1]) / h
-        origin = np.asarray(sensor_origin, dtype=np.float64).reshape(-1)
-        if origin.shape != (3,) or not all(map(math.isfinite, origin.tolist())):
-            return aff
+        pts, fx, fy, origin = frame.pts, frame.fx, frame.fy, frame.origin
+        slope, bins, edge = frame.view()
         idx = [i for i, o in enumerate(aff.objects) if o.kind == "object"]
         boxes = np.array([aff.objects[i].box for i in idx], dtype=np.float64)
         ap = self.affordance_params
         p = self.params
+        g = float(aff.ground_z)
+        noise = (
+            _k.noise_level_kernel(pts, g, ap.ground_tolerance, origin[2]) if p.refine_noise else 0.0
+        )
         res = _k.refine_objects_kernel(
-            pts, boxes, float(aff.ground_z), ap.ground_tolerance, p.refine_margin, fx, fy,
-            p.refine_iters, p.refine_quantile, 0.9, p.refine_gap, origin, 64, 4.0,
-            p.refine_noise_ring, _NOISE_DRAWS,
+            pts, boxes, g, ap.ground_tolerance, p.refine_margin, fx, fy, p.refine_iters,
+            p.refine_quantile, 0.9, p.refine_gap, origin, slope, bins, edge, noise, _NOISE_DRAWS,
         )  # fmt: skip
         objects = list(aff.objects)
         g = float(aff.ground_z)
@@ -310,29 +346,28 @@ class AttentionPipeline:
         )  # fmt: skip
 
     def _view_walls(
-        self, aff: Affordances, points: np.ndarray, forward, sensor_origin
+        self, aff: Affordances, points: np.ndarray, forward, sensor_origin, frame=None
     ) -> Affordances:
         """Add a wall label for each wide run of raw points cut off by the top of the view.
 
         See ``view_wall_width`` in the module docstring. Labels already present are kept as
-        they are; the new labels have no facets.
+        they are; the new labels have no facets. ``frame``: the step's :class:`_Frame`.
         """
-        pts = np.asarray(points)
-        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not math.isfinite(aff.ground_z):
-            return aff
-        if pts.dtype not in (np.float32, np.float64) or not pts.flags.c_contiguous:
-            pts = np.ascontiguousarray(pts, dtype=np.float64)
-        fwd = np.asarray(forward, dtype=np.float64).reshape(-1)
-        h = float(np.hypot(fwd[0], fwd[1]))
-        origin = np.asarray(sensor_origin, dtype=np.float64).reshape(-1)
-        if not h > 1e-9 or origin.shape != (3,) or not all(map(math.isfinite, origin.tolist())):
+        frame = frame or _frame_inputs(aff, points, forward, sensor_origin)
+        if frame is None:
             return aff
         p = self.params
+        tol = self.affordance_params.ground_tolerance
+        g = float(aff.ground_z)
+        # Most frames (a floor, a low block) hold fewer raised points than a run needs.
+        if frame.view_cache is None and _k.count_above(frame.pts, g + tol) < p.refine_min_points:
+            return aff
+        slope, bins, edge = frame.view()
         runs = _k.view_walls_kernel(
-            pts, float(aff.ground_z), self.affordance_params.ground_tolerance,
-            float(fwd[0]) / h, float(fwd[1]) / h, origin, 64, 4.0, p.view_cut,
+            frame.pts, g, tol, frame.fx, frame.fy, slope, bins, edge, p.view_cut,
             p.view_wall_width, p.refine_min_points,
         )  # fmt: skip
+        origin = frame.origin
         if len(runs) == 0:
             return aff
         g = float(aff.ground_z)

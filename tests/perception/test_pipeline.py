@@ -90,11 +90,14 @@ def test_many_raised_facets_never_overflow_the_label_table():
 # -- raw-point sizes ----------------------------------------------------------------------
 
 
-def _refine(points, boxes, origin=ORIGIN, fwd=(1.0, 0.0), noise_ring=0.0):
+def _refine(points, boxes, origin=ORIGIN, fwd=(1.0, 0.0), noise=0.0):
+    points = np.ascontiguousarray(points)
+    origin = np.asarray(origin, dtype=np.float64)
+    slope, bins, edge = _k.view_edge_kernel(points, fwd[0], fwd[1], origin, 64, 4.0)
     return _k.refine_objects_kernel(
-        np.ascontiguousarray(points), np.ascontiguousarray(boxes, dtype=np.float64), 0.0, 0.02,
-        0.04, fwd[0], fwd[1], 4, 0.0, 0.9, 0.03, np.asarray(origin, dtype=np.float64), 64, 4.0,
-        noise_ring, np.random.default_rng(0).standard_normal((64, 512)),
+        points, np.ascontiguousarray(boxes, dtype=np.float64), 0.0, 0.02, 0.04, fwd[0], fwd[1],
+        4, 0.0, 0.9, 0.03, origin, slope, bins, edge, noise,
+        np.random.default_rng(0).standard_normal((64, 512)),
     )  # fmt: skip
 
 
@@ -145,29 +148,24 @@ def _radial_noise(pts, rel, seed=0, origin=ORIGIN):
 
 
 def test_noise_level_reads_the_range_noise_off_the_floor():
-    floor = _box_cloud((0.5, -0.1, 0.0), (0.7, 0.05, 0.07))
-    floor = floor[floor[:, 2] <= 0.0]
-    scratch = np.empty(len(floor))
+    pts = _box_cloud((0.5, -0.1, 0.0), (0.7, 0.05, 0.07))
     for rel in (0.0, 0.005, 0.01, 0.02):
-        pts = _radial_noise(floor, rel)
-        sig = _k._noise_level(
-            pts, 0.0, 0.02, 1.0, 0.0, ORIGIN[2], 0.5, 0.7, -0.1, 0.05, 0.2, 0.04, scratch
-        )
+        sig = _k.noise_level_kernel(_radial_noise(pts, rel), 0.0, 0.02, ORIGIN[2])
         assert sig == pytest.approx(rel, rel=0.1, abs=1e-12)
+    assert _k.noise_level_kernel(pts[:10], 0.0, 0.02, ORIGIN[2]) == 0.0  # too few points
 
 
 def test_refine_takes_the_noise_overshoot_out_of_a_dense_noisy_extent():
     lo, hi = (0.5, -0.1, 0.0), (0.7, 0.05, 0.07)
     clean = _box_cloud(lo, hi, spacing=0.004)
     box = [[[0.58, -0.04, 0.0], [0.62, 0.0, 0.07]]]
-    # Noise-free: the correction finds no noise and changes nothing.
-    off, on = _refine(clean, box)[0], _refine(clean, box, noise_ring=0.15)[0]
-    assert on[9] == 0.0 and np.array_equal(off[:9], on[:9])
     errs_off, errs_on = [], []
     for seed in range(5):
         noisy = _radial_noise(clean, 0.01, seed)
-        off, on = _refine(noisy, box)[0], _refine(noisy, box, noise_ring=0.15)[0]
-        assert on[9] == pytest.approx(0.01, rel=0.15)
+        sig = _k.noise_level_kernel(noisy, 0.0, 0.02, ORIGIN[2])
+        assert sig == pytest.approx(0.01, rel=0.15)
+        off, on = _refine(noisy, box)[0], _refine(noisy, box, noise=sig)[0]
+        assert on[9] == sig and np.array_equal(off[:2], on[:2])
         assert on[3] <= off[3] and on[2] <= off[2]  # ends only ever move inwards
         errs_off.append(off[3] - 0.20)
         errs_on.append(on[3] - 0.20)
@@ -176,6 +174,9 @@ def test_refine_takes_the_noise_overshoot_out_of_a_dense_noisy_extent():
     # out (a quadratic SIMEX extrapolation of a maximum under-corrects).
     assert np.median(errs_off) > 0.02
     assert 0.0 < np.median(errs_on) < 0.65 * np.median(errs_off)
+    # Sparse points (2 cm apart, noise 0.5–0.7 cm along the length): the ends stay.
+    sparse = _radial_noise(_box_cloud(lo, hi, spacing=0.02), 0.01)
+    assert np.array_equal(_refine(sparse, box)[0, :9], _refine(sparse, box, noise=0.01)[0, :9])
 
 
 def _wall_foot_cloud(wall_y=(-0.5, 0.5), seen=0.06):
@@ -189,9 +190,8 @@ def _wall_foot_cloud(wall_y=(-0.5, 0.5), seen=0.06):
 
 
 def _view_walls(pts, min_width=0.3):
-    return _k.view_walls_kernel(
-        pts, 0.0, 0.02, 1.0, 0.0, ORIGIN, 64, 4.0, 0.02, min_width, 8
-    )  # fmt: skip
+    slope, bins, edge = _k.view_edge_kernel(pts, 1.0, 0.0, ORIGIN, 64, 4.0)
+    return _k.view_walls_kernel(pts, 0.0, 0.02, 1.0, 0.0, slope, bins, edge, 0.02, min_width, 8)
 
 
 def test_view_walls_finds_a_wide_strip_cut_off_by_the_top_of_the_view():
