@@ -120,10 +120,10 @@ class PipelineParams:
     """Noise-aware extent ends: the range noise σ/d is estimated on the frame's floor points
     (``noise_level_kernel``) and each end whose noise exceeds the mean point spacing is moved
     back by the outermost noisy points' expected overshoot (``refine_objects_kernel``). No
-    effect on a noise-free frame. ``scripts/bench_affordance_accuracy.py --scale 1.0 --scenes
-    50``, 1 % noise: length error +1.2 cm → +0.6 cm (median), "all three" 84 % → 94 %
-    (noise-free: 94 %); at the default resolution the boxes' measures are unchanged (100
-    scenes), only dense wall-foot strips trigger it."""
+    effect on a noise-free frame. ``scripts/bench_affordance_accuracy.py --scale 1.0``, 1 %
+    noise: "all three" 84 % → 92 % (50 scenes; length error +1.2 → +0.5 cm median) and 85 %
+    → 92 % (100 scenes; noise-free 95 %); at the default resolution the boxes' measures are
+    unchanged (100 scenes), only dense wall-foot strips trigger it."""
     refine_edge: float = 1.0
     """Edge correction: each end of an extent moves out by this × half the mean raw-point
     spacing on the object, sqrt(footprint / points); 0 = off."""
