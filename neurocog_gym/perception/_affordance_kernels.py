@@ -1119,10 +1119,158 @@ def _view_slopes(points, fx, fy, of, ol, oz, umax, scale, slope, q):
         q[i] = (dl / df + umax) * scale
 
 
+_NOISE_MIN_POINTS = 16
+"""Fewest floor points round an object for a noise estimate (fewer: no noise correction)."""
+_NOISE_SAMPLE = 512
+"""Most floor points the noise estimate uses (its relative error with 512: about 5 %)."""
+
+
+@njit(cache=True)
+def noise_level_kernel(points, ground, tol, oz):
+    """Range noise σ/d of the sensors, estimated on the floor of a frame.
+
+    A range error δ = σ d along a ray moves a floor point's height by σ (oz - z), whatever its
+    distance (d and the ray's drop scale together), so (z - median z) / (oz - z) over floor
+    points (within ``tol`` of ``ground``) has spread σ; its median absolute deviation × 1.4826
+    estimates σ (0 on a noise-free frame; the few points of walls' and objects' lowest ``tol``
+    do not move a median). Up to ``_NOISE_SAMPLE`` floor points are taken, evenly through the
+    frame; fewer than ``_NOISE_MIN_POINTS`` give 0.
+
+    Args:
+        points: (N, 3) float32 or float64, metres, the frame.
+        ground: metres, the ground level.
+        tol: metres, floor points lie within this of ``ground``.
+        oz: metres, the sensors' height.
+    """
+    n = points.shape[0]
+    step = max(1, n // (2 * _NOISE_SAMPLE))
+    zs = np.empty(_NOISE_SAMPLE)
+    m = 0
+    for i in range(0, n, step):
+        z = points[i, 2]
+        if abs(z - ground) <= tol and oz - z > 1e-3:
+            zs[m] = z
+            m += 1
+            if m == _NOISE_SAMPLE:
+                break
+    if m < _NOISE_MIN_POINTS:
+        return 0.0
+    zmed = np.median(zs[:m])
+    rel = np.empty(m)
+    for i in range(m):
+        rel[i] = (zs[i] - zmed) / (oz - zs[i])
+    med = np.median(rel)
+    for i in range(m):
+        rel[i] = abs(rel[i] - med)
+    return 1.4826 * np.median(rel)
+
+
+@njit(cache=True)
+def _simex_end(values, cnt, sign, o, end, sig, spacing, draws):
+    """One end of an extent with the range noise's overshoot taken out (SIMEX).
+
+    With ``sign`` = +1 the end is the largest of ``values[:cnt]`` not beyond ``end`` (the walked
+    extent), with -1 the smallest (``end`` and the result are then negated, as for +1). Point
+    i's range noise moves it along this axis with standard deviation ``sig`` × |values[i] -
+    o| (the ray's component along the axis × its length). The outermost of many noisy points
+    overshoots the edge; simulation-extrapolation (Cook & Stefanski 1994) measures by how much:
+    T(λ) = E[max_i(y_i + √λ s_i Z_i)] for λ = 1, 2 (added noise of λ times the variance, over
+    the fixed draws), and the quadratic through T(0) = end, T(1), T(2) is read at λ = -1 (no
+    noise). Applied only where the outermost point's noise exceeds the mean point ``spacing``:
+    on sparser points the outermost sample falls short of the edge by about half a spacing
+    (the pipeline's edge correction) and the noise mostly fills that gap. Never moves the end
+    outwards.
+    """
+    s_out = -1.0
+    best = -np.inf
+    for i in range(cnt):
+        y = sign * values[i]
+        if y <= end and y > best:
+            best = y
+            s_out = sig * abs(values[i] - o)
+    if not s_out > spacing:
+        return end
+    # The candidates: points that can reach the end with twice the variance (6.5 sd).
+    r2 = np.sqrt(2.0)
+    cy = np.empty(cnt)
+    cs = np.empty(cnt)
+    nc = 0
+    for i in range(cnt):
+        y = sign * values[i]
+        s = sig * abs(values[i] - o)
+        if y <= end and y + 6.5 * r2 * s >= end:
+            cy[nc] = y
+            cs[nc] = s
+            nc += 1
+    nb = draws.shape[0]
+    nd = draws.shape[1]
+    t1 = 0.0
+    t2 = 0.0
+    for b in range(nb):
+        m1 = -np.inf
+        m2 = -np.inf
+        for j in range(nc):
+            z = draws[b, j % nd] * cs[j]
+            m1 = max(m1, cy[j] + z)
+            m2 = max(m2, cy[j] + r2 * z)
+        t1 += m1
+        t2 += m2
+    t1 /= nb
+    t2 /= nb
+    return min(end, 3.0 * end - 3.0 * t1 + t2)
+
+
+@njit(cache=True)
+def view_edge_kernel(points, fx, fy, origin, nbins, umax):
+    """The upper edge of the view per azimuth bin, and each point's elevation and bin.
+
+    Seen from ``origin``, a point's tan(elevation) is (z - origin z) / its horizontal distance
+    and its bin the truncated (tan(azimuth) + ``umax``) × ``nbins`` / (2 ``umax``) about the
+    walking direction, clamped to the end bins; the edge of a bin is the largest tan(elevation)
+    in it. Points level with or behind the sensors (along the walking direction), or absurdly
+    high, get bin -1 and no edge. Shared by ``refine_objects_kernel`` and
+    ``view_walls_kernel`` (one pass per frame).
+
+    Returns:
+        ``(slope, bins, edge)``: (N,) float64, (N,) int64, (nbins,) float64 (-inf: empty bin).
+    """
+    n = points.shape[0]
+    of = origin[0] * fx + origin[1] * fy
+    ol = origin[1] * fx - origin[0] * fy
+    oz = origin[2]
+    scale = nbins / (2.0 * umax)
+    slope = np.empty(n)
+    q = np.empty(n)
+    _view_slopes(points, fx, fy, of, ol, oz, umax, scale, slope, q)
+    edge = np.full(nbins, -np.inf)
+    bins = np.empty(n, np.int64)
+    for i in range(n):
+        pf = points[i, 0] * fx + points[i, 1] * fy
+        if not (pf - of > 1e-6 and abs(points[i, 2]) < 1e4):
+            bins[i] = -1
+            continue
+        b = int(q[i])
+        b = min(max(b, 0), nbins - 1)
+        bins[i] = b
+        if slope[i] > edge[b]:
+            edge[b] = slope[i]
+    return slope, bins, edge
+
+
+@njit(cache=True)
+def count_above(points, thr):
+    """Number of points higher than ``thr`` (metres)."""
+    c = 0
+    for i in range(points.shape[0]):
+        c += points[i, 2] > thr
+    return c
+
+
 @njit(cache=True)
 def refine_objects_kernel(
-    points, boxes, ground, tol, margin, fx, fy, iters, q_lo, q_top, gap, origin, nbins, umax
-):
+    points, boxes, ground, tol, margin, fx, fy, iters, q_lo, q_top, gap, origin, slope, bins,
+    edge, noise, draws,
+):  # fmt: skip
     """Object sizes from the raw frame points round each object (pipeline ``refine``).
 
     The paper's "raw data around the suspected obstacle" (Algorithm 1, §4.1). The frame's
@@ -1146,46 +1294,42 @@ def refine_objects_kernel(
         gap: metres; after the quantile cut, an end point farther than this from the next
             point inwards is dropped, and so on (isolated stray points: range noise).
         origin: (3,) float64, metres, the sensors' position.
-        nbins: azimuth bins of the view's upper edge.
-        umax: the bins cover tan(azimuth) in [-umax, umax] about the walking direction.
+        slope: (N,) float64, each point's tan(elevation) (``view_edge_kernel``).
+        bins: (N,) int64, each point's azimuth bin, -1 to skip it (``view_edge_kernel``).
+        edge: (nbins,) float64, the view's upper edge per bin (``view_edge_kernel``).
+        noise: range noise σ/d (``noise_level_kernel``); > 0 moves each end whose noise
+            exceeds the mean point spacing back by its expected overshoot (``_simex_end``).
+        draws: (B, D) float64 standard normal draws for ``_simex_end`` (fixed: deterministic).
 
     Returns:
-        (K, 9) float64: points used, height above ground, width (across), length (along), then
-        the extent as along-min, along-max, across-min, across-max, and the smallest distance
+        (K, 10) float64: points used, height above ground, width (across), length (along), then
+        the extent as along-min, along-max, across-min, across-max, the smallest distance
         (in tan(elevation) seen from ``origin``) of an object point below the upper edge of the
         view in its azimuth bin: near 0 when the view cuts the surface off (a wall whose top is
-        out of sight). A row with 0 points is left at NaN.
+        out of sight), and the ``noise`` used.
+        A row with 0 points is left at NaN.
     """
     n = points.shape[0]
     k_n = boxes.shape[0]
-    out = np.full((k_n, 9), np.nan)
+    out = np.full((k_n, 10), np.nan)
     thr = ground + tol
     hz = np.empty(n)
     hf = np.empty(n)
     hl = np.empty(n)
     hs = np.empty(n)
     hb = np.empty(n, np.int64)
-    edge = np.full(nbins, -np.inf)
     of = origin[0] * fx + origin[1] * fy
     ol = origin[1] * fx - origin[0] * fy
-    oz = origin[2]
-    scale = nbins / (2.0 * umax)
-    slope = np.empty(n)
-    q = np.empty(n)
-    _view_slopes(points, fx, fy, of, ol, oz, umax, scale, slope, q)
     m = 0
     for i in range(n):
+        b = bins[i]
+        if b < 0:
+            continue
         x = points[i, 0]
         y = points[i, 1]
         z = points[i, 2]
         pf = x * fx + y * fy
         pl = y * fx - x * fy
-        if not (pf - of > 1e-6 and abs(z) < 1e4):
-            continue
-        b = int(q[i])
-        b = min(max(b, 0), nbins - 1)
-        if slope[i] > edge[b]:
-            edge[b] = slope[i]
         if z > thr:
             hz[m] = z
             hf[m] = pf
@@ -1239,6 +1383,15 @@ def refine_objects_kernel(
             f0, f1, l0, l1 = nf0, nf1, nl0, nl1
         if cnt == 0:
             continue
+        sig = noise
+        if sig > 0.0:
+            sp = np.sqrt(max(f1 - f0, 0.0) * max(l1 - l0, 0.0) / cnt)
+            nf0 = -_simex_end(bf, cnt, -1.0, of, -f0, sig, sp, draws)
+            nf1 = _simex_end(bf, cnt, 1.0, of, f1, sig, sp, draws)
+            nl0 = -_simex_end(bl, cnt, -1.0, ol, -l0, sig, sp, draws)
+            nl1 = _simex_end(bl, cnt, 1.0, ol, l1, sig, sp, draws)
+            f0, f1, l0, l1 = nf0, nf1, nl0, nl1
+        out[k, 9] = sig
         out[k, 0] = cnt
         out[k, 1] = np.partition(bz[:cnt], int(q_top * (cnt - 1)))[int(q_top * (cnt - 1))] - ground
         out[k, 2] = l1 - l0
@@ -1252,3 +1405,104 @@ def refine_objects_kernel(
             gmin = min(gmin, bg[i])
         out[k, 8] = gmin
     return out
+
+
+@njit(cache=True)
+def view_walls_kernel(points, ground, tol, fx, fy, slope, bins, edge, cut, min_width, min_points):
+    """Surfaces cut off by the top of the view across a wide azimuth span (pipeline ``view_wall``).
+
+    Per azimuth bin (``view_edge_kernel``), the upper edge of the view is the largest
+    tan(elevation) seen from the sensors; a point is *cut off* when it is higher than ``tol``
+    above ``ground`` and within ``cut`` of that edge: the surface it lies on rises out of
+    sight. On a bare floor the view's upper edge is floor (z ≈ 0), so no point is cut off; a
+    box whose top is in sight has the floor behind it above it in the view. Runs of
+    consecutive bins holding cut-off points are candidate surfaces; a run whose cut-off points
+    span at least ``min_width`` across the walking direction, with at least ``min_points``
+    points, is returned.
+
+    Args:
+        points: (N, 3) float32 or float64, metres, the frame.
+        ground: metres, the ground level.
+        tol: metres, cut-off points are higher than ground + tol.
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        slope: (N,) float64, each point's tan(elevation) (``view_edge_kernel``).
+        bins: (N,) int64, each point's azimuth bin, -1 to skip it (``view_edge_kernel``).
+        edge: (nbins,) float64, the view's upper edge per bin (``view_edge_kernel``).
+        cut: tan(elevation) distance to the view's edge within which a point is cut off.
+        min_width: metres, smallest span across the walking direction of a returned run.
+        min_points: fewest cut-off points of a returned run.
+
+    Returns:
+        (R, 11) float64, one row per run: points, top height above ground, min x, min y,
+        max x, max y, mean x, mean y, mean z, across-extent, along-extent.
+    """
+    n = points.shape[0]
+    nbins = edge.shape[0]
+    thr = ground + tol
+    # Per bin: count, top z, x/y box, sums, across and along extents of the cut-off points.
+    acc = np.zeros((nbins, 13))
+    for b in range(nbins):
+        acc[b, 1] = -np.inf
+        acc[b, 2] = np.inf
+        acc[b, 3] = np.inf
+        acc[b, 4] = -np.inf
+        acc[b, 5] = -np.inf
+        acc[b, 9] = np.inf
+        acc[b, 10] = -np.inf
+        acc[b, 11] = np.inf
+        acc[b, 12] = -np.inf
+    for i in range(n):
+        z = points[i, 2]
+        b = bins[i]
+        if not (z > thr and b >= 0 and edge[b] - slope[i] <= cut):
+            continue
+        x = points[i, 0]
+        y = points[i, 1]
+        pf = x * fx + y * fy
+        pl = y * fx - x * fy
+        acc[b, 0] += 1.0
+        acc[b, 1] = max(acc[b, 1], z)
+        acc[b, 2] = min(acc[b, 2], x)
+        acc[b, 3] = min(acc[b, 3], y)
+        acc[b, 4] = max(acc[b, 4], x)
+        acc[b, 5] = max(acc[b, 5], y)
+        acc[b, 6] += x
+        acc[b, 7] += y
+        acc[b, 8] += z
+        acc[b, 9] = min(acc[b, 9], pl)
+        acc[b, 10] = max(acc[b, 10], pl)
+        acc[b, 11] = min(acc[b, 11], pf)
+        acc[b, 12] = max(acc[b, 12], pf)
+    out = np.empty((nbins, 11))
+    r = 0
+    b = 0
+    while b < nbins:
+        if acc[b, 0] == 0.0:
+            b += 1
+            continue
+        run = acc[b].copy()
+        b += 1
+        while b < nbins and acc[b, 0] > 0.0:
+            run[0] += acc[b, 0]
+            for c in (1, 4, 5, 10, 12):
+                run[c] = max(run[c], acc[b, c])
+            for c in (2, 3, 9, 11):
+                run[c] = min(run[c], acc[b, c])
+            for c in (6, 7, 8):
+                run[c] += acc[b, c]
+            b += 1
+        if run[0] >= min_points and run[10] - run[9] >= min_width:
+            out[r, 0] = run[0]
+            out[r, 1] = run[1] - ground
+            out[r, 2] = run[2]
+            out[r, 3] = run[3]
+            out[r, 4] = run[4]
+            out[r, 5] = run[5]
+            out[r, 6] = run[6] / run[0]
+            out[r, 7] = run[7] / run[0]
+            out[r, 8] = run[8] / run[0]
+            out[r, 9] = run[10] - run[9]
+            out[r, 10] = run[12] - run[11]
+            r += 1
+    return out[:r]

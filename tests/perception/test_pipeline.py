@@ -90,10 +90,14 @@ def test_many_raised_facets_never_overflow_the_label_table():
 # -- raw-point sizes ----------------------------------------------------------------------
 
 
-def _refine(points, boxes, origin=ORIGIN, fwd=(1.0, 0.0)):
+def _refine(points, boxes, origin=ORIGIN, fwd=(1.0, 0.0), noise=0.0):
+    points = np.ascontiguousarray(points)
+    origin = np.asarray(origin, dtype=np.float64)
+    slope, bins, edge = _k.view_edge_kernel(points, fwd[0], fwd[1], origin, 64, 4.0)
     return _k.refine_objects_kernel(
-        np.ascontiguousarray(points), np.ascontiguousarray(boxes, dtype=np.float64), 0.0, 0.02,
-        0.04, fwd[0], fwd[1], 4, 0.0, 0.9, 0.03, np.asarray(origin, dtype=np.float64), 64, 4.0,
+        points, np.ascontiguousarray(boxes, dtype=np.float64), 0.0, 0.02, 0.04, fwd[0], fwd[1],
+        4, 0.0, 0.9, 0.03, origin, slope, bins, edge, noise,
+        np.random.default_rng(0).standard_normal((64, 512)),
     )  # fmt: skip
 
 
@@ -134,6 +138,103 @@ def test_refine_flags_a_surface_cut_off_by_the_top_of_the_view():
     pts = np.concatenate([floor, wall]).astype(np.float32)
     row = _refine(pts, [[[0.95, -0.1, 0.0], [1.0, 0.1, 0.06]]])[0]
     assert row[8] == pytest.approx(0.0, abs=1e-9)
+
+
+def _radial_noise(pts, rel, seed=0, origin=ORIGIN):
+    """ToF range noise: each point moved along its ray by rel × its distance (Gaussian)."""
+    d = pts.astype(np.float64) - origin
+    z = np.random.default_rng(seed).standard_normal((len(pts), 1))
+    return (origin + d * (1.0 + rel * z)).astype(np.float32)
+
+
+def test_noise_level_reads_the_range_noise_off_the_floor():
+    pts = _box_cloud((0.5, -0.1, 0.0), (0.7, 0.05, 0.07))
+    for rel in (0.0, 0.005, 0.01, 0.02):
+        sig = _k.noise_level_kernel(_radial_noise(pts, rel), 0.0, 0.02, ORIGIN[2])
+        assert sig == pytest.approx(rel, rel=0.1, abs=1e-12)
+    assert _k.noise_level_kernel(pts[:10], 0.0, 0.02, ORIGIN[2]) == 0.0  # too few points
+
+
+def test_refine_takes_the_noise_overshoot_out_of_a_dense_noisy_extent():
+    lo, hi = (0.5, -0.1, 0.0), (0.7, 0.05, 0.07)
+    clean = _box_cloud(lo, hi, spacing=0.004)
+    box = [[[0.58, -0.04, 0.0], [0.62, 0.0, 0.07]]]
+    errs_off, errs_on = [], []
+    for seed in range(5):
+        noisy = _radial_noise(clean, 0.01, seed)
+        sig = _k.noise_level_kernel(noisy, 0.0, 0.02, ORIGIN[2])
+        assert sig == pytest.approx(0.01, rel=0.15)
+        off, on = _refine(noisy, box)[0], _refine(noisy, box, noise=sig)[0]
+        assert on[9] == sig and np.array_equal(off[:2], on[:2])
+        assert on[3] <= off[3] and on[2] <= off[2]  # ends only ever move inwards
+        errs_off.append(off[3] - 0.20)
+        errs_on.append(on[3] - 0.20)
+    # The outermost of the many noisy points on the faces at both ends (this cloud has all
+    # four sides) overshoot the 20 cm length by ~3.7 cm; the correction takes about half of it
+    # out (a quadratic SIMEX extrapolation of a maximum under-corrects).
+    assert np.median(errs_off) > 0.02
+    assert 0.0 < np.median(errs_on) < 0.65 * np.median(errs_off)
+    # Sparse points (2 cm apart, noise 0.5–0.7 cm along the length): the ends stay.
+    sparse = _radial_noise(_box_cloud(lo, hi, spacing=0.02), 0.01)
+    assert np.array_equal(_refine(sparse, box)[0, :9], _refine(sparse, box, noise=0.01)[0, :9])
+
+
+def _wall_foot_cloud(wall_y=(-0.5, 0.5), seen=0.06):
+    """A floor up to x = 1.0 (the top of the view there) and the foot of a wall at x = 1.0,
+    seen up to ``seen`` across ``wall_y``: the view's upper edge cuts it off."""
+    ys = np.arange(-0.5, 0.5, 0.02)
+    floor = np.array([[x, y, 0.0] for x in np.arange(0.2, 1.0, 0.02) for y in ys])
+    wy = ys[(ys >= wall_y[0]) & (ys <= wall_y[1])]
+    wall = np.array([[1.0, y, z] for z in np.arange(0.0, seen + 1e-9, 0.01) for y in wy])
+    return np.concatenate([floor, wall]).astype(np.float32)
+
+
+def _view_walls(pts, min_width=0.3):
+    slope, bins, edge = _k.view_edge_kernel(pts, 1.0, 0.0, ORIGIN, 64, 4.0)
+    return _k.view_walls_kernel(pts, 0.0, 0.02, 1.0, 0.0, slope, bins, edge, 0.02, min_width, 8)
+
+
+def test_view_walls_finds_a_wide_strip_cut_off_by_the_top_of_the_view():
+    runs = _view_walls(_wall_foot_cloud())
+    assert runs.shape == (1, 11)
+    n, top, x0, y0, x1, y1 = runs[0, :6]
+    assert n >= 8 and top == pytest.approx(0.06, abs=1e-6)
+    assert x0 == pytest.approx(1.0, abs=1e-6) and x1 == pytest.approx(1.0, abs=1e-6)
+    assert y0 <= -0.45 and y1 >= 0.45 and runs[0, 9] >= 0.9
+
+
+def test_view_walls_ignores_floors_boxes_in_sight_and_narrow_cut_surfaces():
+    floor = _wall_foot_cloud(seen=0.0)
+    assert _view_walls(floor[floor[:, 2] <= 0.0]).shape == (0, 11)
+    # A box whose top is in sight: the floor behind it is higher in the view.
+    assert _view_walls(_box_cloud((0.5, -0.1, 0.0), (0.7, 0.05, 0.07))).shape == (0, 11)
+    # A 20 cm wide surface cut off by the view (a box at the far edge): narrower than a run.
+    narrow = _wall_foot_cloud(wall_y=(-0.1, 0.1))
+    assert _view_walls(narrow).shape == (0, 11)
+    assert _view_walls(narrow, min_width=0.1).shape[0] == 1
+
+
+def test_pipeline_adds_a_wall_the_graph_misses_and_keeps_its_labels():
+    nodes, edges, _ = _lattice(4, 0.2)  # a flat floor graph up to x = 1.0: all terrain
+    aff = detect_affordances(nodes, edges, ORIGIN, ground_z=0.0)
+    assert set(aff.label_kinds) == {"terrain"}
+    pts = _wall_foot_cloud()
+    out = AttentionPipeline()._view_walls(aff, pts, (1.0, 0.0, 0.0), ORIGIN)
+    assert out.objects[: len(aff.objects)] == aff.objects
+    (wall,) = out.walls
+    assert out.label_kinds == tuple(o.kind for o in out.objects)
+    assert wall.n_nodes == 0 and not wall.suspected and wall.gamma == pytest.approx(math.pi / 2)
+    assert wall.height == pytest.approx(0.06, abs=1e-6) and wall.width >= 0.9
+    assert wall.box[0, 0] == pytest.approx(1.0, abs=1e-6) and wall.box[0, 2] == 0.0
+    assert wall.normal == pytest.approx([-1.0, 0.0, 0.0], abs=0.02)
+    assert out.facet_labels is aff.facet_labels and out.obstacles == []
+    # A wall label already overlapping it is not doubled; the rule can be switched off.
+    again = AttentionPipeline()._view_walls(out, pts, (1.0, 0.0, 0.0), ORIGIN)
+    assert len(again.walls) == 1
+    off = AttentionPipeline(params=PipelineParams(view_wall_width=0.0))
+    for k in range(3):
+        off.step(pts, ORIGIN, 0.01 * k)
+        assert off.last.walls == []
 
 
 # -- the pipeline ----------------------------------------------------------------------
