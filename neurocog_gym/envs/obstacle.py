@@ -22,6 +22,8 @@ The episode terminates when the robot passes (or falls); the time limit truncate
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
@@ -68,7 +70,7 @@ class ObstacleEnv(QuadrupedEnv):
             warmup_cycles=warmup_cycles, **kwargs,
         )  # fmt: skip
         self.tof = ToFArray(self.model, tof or ToFParams(backend="numba"))
-        self.pipeline = AttentionPipeline(seed=0, params=perception)
+        self.pipeline = AttentionPipeline(seed=0, params=_env_perception(perception, self.tof))
         self.effectivity = Effectivity(effectivity)
         self.pool = ObstaclePool(self.model)
         self.pass_margin = float(pass_margin)
@@ -336,6 +338,23 @@ class ObstacleEnv(QuadrupedEnv):
             for marker in overlay_markers(self):
                 viewer.add_marker(**marker)
         return super().render()
+
+
+def _env_perception(params: PipelineParams | None, tof: ToFArray) -> PipelineParams:
+    """``params`` (or the defaults) without the raw-point additions nothing in the env reads.
+
+    * ``refine_noise`` only when the sensors have range noise: on a noise-free frame it
+      estimates no noise and moves no extent end.
+    * ``view_wall_width`` 0: the obstacle scenes have no walls, and the wall labels it adds
+      (which have no facets) reach neither the observation, the attention nor the effectivity,
+      which read objects only.
+
+    Together they cost about 20 µs a control cycle with a block in view (4 % of a step).
+    """
+    p = params or PipelineParams()
+    return replace(
+        p, refine_noise=p.refine_noise and tof.params.noise_std_rel > 0.0, view_wall_width=0.0
+    )
 
 
 _KIND_RGBA = {

@@ -161,6 +161,20 @@ def test_attention_off_uses_plain_gng():
     assert type(env.unwrapped.pipeline.net).__name__ == "GNG"
 
 
+@pytest.mark.parametrize("noise", [0.0, 0.01])
+def test_env_pipeline_drops_the_raw_point_additions_it_never_reads(noise):
+    from neurocog_gym.robot.tof import ToFParams
+
+    tof = ToFParams(backend="numba", noise_std_rel=noise)
+    given = PipelineParams(gng="gng", refine_noise=True, view_wall_width=0.3)
+    env = gym.make("NeuroCog/StaticObstacle-v0", tof=tof, perception=given)
+    p = env.unwrapped.pipeline.params
+    assert p.view_wall_width == 0.0  # no walls in the scene; wall labels reach nothing
+    assert p.refine_noise is (noise > 0)  # a noise-free frame has no noise to take out
+    assert p.gng == "gng"  # the rest as given
+    env.close()
+
+
 def test_graph_in_observation_behind_a_flag():
     env = gym.make(SUDDEN, include_graph=True, graph_max_nodes=256, graph_max_edges=1024)
     obs, _ = env.reset(seed=0)
