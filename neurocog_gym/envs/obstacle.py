@@ -206,7 +206,7 @@ class ObstacleEnv(QuadrupedEnv):
         yaw = self._yaw()
         self._sense_and_perceive(yaw=yaw)
         self._update_effectivity(yaw, touch)
-        touching = bool(self.pool.touching(self.data, self.robot.robot_geoms).any())
+        touching = self.pool.touching_any(self.data, self.robot.robot_geoms)
         if touching and not self._was_touching:
             self.touch_events += 1
         self._was_touching = touching

@@ -61,6 +61,12 @@ def matsuoka_step(x, v, W, V, s, u0, b, tau, T, tau_f, dt_units, n_sub):
     return y
 
 
+@njit(cache=True)
+def matsuoka_step_into(x, v, W, V, s, u0, b, tau, T, tau_f, dt_units, n_sub, out):
+    """``matsuoka_step`` with the outputs y written into ``out`` (n,) (no array returned)."""
+    out[:] = matsuoka_step(x, v, W, V, s, u0, b, tau, T, tau_f, dt_units, n_sub)
+
+
 @njit(cache=True, inline="always")
 def force_length(theta, theta_opt, width, c):
     """Eq. (9): F_l = exp(c |(theta - theta_opt) / (theta_R omega)|^3), c = ln 0.05."""

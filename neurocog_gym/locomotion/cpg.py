@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from neurocog_gym.locomotion._kernels import matsuoka_step
+from neurocog_gym.locomotion._kernels import matsuoka_step_into
 from neurocog_gym.locomotion.chromosome import N_NEURONS, decode
 
 
@@ -89,9 +89,9 @@ class MatsuokaCPG:
             (24,) outputs y_i (a view of the internal buffer).
         """
         p = self.params
-        self.y[:] = matsuoka_step(
+        matsuoka_step_into(
             self.x, self.v, self.W, self.V, np.asarray(touch, dtype=np.float64),
             p.u0, p.b, p.tau, p.T, p.tau_f * freq_scale,
-            self.dt / p.time_unit / p.substeps, p.substeps,
+            self.dt / p.time_unit / p.substeps, p.substeps, self.y,
         )  # fmt: skip
         return self.y

@@ -413,9 +413,7 @@ class AttentionPipeline:
             for o in aff.obstacles
             if o.height >= self.params.min_height
         ]
-        if not found and (
-            not len(self.memory_time) or not (t - self.memory_time > self.params.hold).any()
-        ):
+        if not found and (not any(t - tm > self.params.hold for tm in self.memory_time.tolist())):
             return  # nothing new and nothing expired (the memory never exceeds max_boxes)
         # Boxes as nested lists of floats: the overlap tests are plain comparisons.
         boxes = self.memory_boxes.tolist()

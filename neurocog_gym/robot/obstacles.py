@@ -164,17 +164,24 @@ class ObstaclePool:
     def touching(self, data: mujoco.MjData, robot_geoms: np.ndarray) -> np.ndarray:
         """(K,) bool: which placed blocks are in contact with a robot geom now."""
         hit = np.zeros(len(self.blocks), dtype=bool)
+        self._touching(data, robot_geoms, hit)
+        return hit
+
+    def touching_any(self, data: mujoco.MjData, robot_geoms: np.ndarray) -> bool:
+        """Whether any placed block is in contact with a robot geom now."""
+        return self._touching(data, robot_geoms, np.zeros(len(self.blocks), dtype=bool))
+
+    def _touching(self, data: mujoco.MjData, robot_geoms: np.ndarray, hit: np.ndarray) -> bool:
         n = data.ncon
         if n == 0 or not self.blocks:
-            return hit
+            return False
         if self._robot_ref is not robot_geoms:
             # Lookup tables by geom id: is it the robot's, and which block slot is it.
             self._is_robot = np.zeros(self._ngeom, dtype=bool)
             self._is_robot[np.asarray(robot_geoms)] = True
             self._robot_ref = robot_geoms
         # (n, 2) geom ids of each contact
-        _touching_kernel(data.contact.geom[:n], self._slot_of, self._is_robot, len(hit), hit)
-        return hit
+        return _touching_kernel(data.contact.geom[:n], self._slot_of, self._is_robot, len(hit), hit)
 
 
 @njit(cache=True)
@@ -187,15 +194,20 @@ def _touching_kernel(geom, slot_of, is_robot, n_blocks, hit):  # pragma: no cove
         is_robot: (ngeom,) bool, whether each geom is the robot's.
         n_blocks: number of placed blocks.
         hit: (K,) bool, written.
+
+    Returns:
+        Whether any block is hit.
     """
+    anyhit = False
     for c in range(geom.shape[0]):
         g0, g1 = geom[c, 0], geom[c, 1]
         s0, s1 = slot_of[g0], slot_of[g1]
         # A block touches the robot when the other geom of one of its contacts is the robot's.
         if 0 <= s0 < n_blocks and is_robot[g1]:
-            hit[s0] = True
+            hit[s0] = anyhit = True
         if 0 <= s1 < n_blocks and is_robot[g0]:
-            hit[s1] = True
+            hit[s1] = anyhit = True
+    return anyhit
 
 
 def random_block(

@@ -81,11 +81,14 @@ def test_touching_kernel_marks_blocks_in_contact_with_the_robot():
         dtype=np.int32,
     )
     hit = np.zeros(3, dtype=bool)
-    _touching_kernel(contacts, slot_of, is_robot, 3, hit)
+    assert _touching_kernel(contacts, slot_of, is_robot, 3, hit)
     assert hit.tolist() == [False, True, True]
     hit = np.zeros(3, dtype=bool)
-    _touching_kernel(contacts, slot_of, is_robot, 2, hit)  # ... but slot 2 is not placed
+    assert _touching_kernel(contacts, slot_of, is_robot, 2, hit)  # ... but slot 2 is not placed
     assert hit.tolist() == [False, True, False]
+    hit = np.zeros(3, dtype=bool)
+    assert not _touching_kernel(contacts[[0, 3]], slot_of, is_robot, 3, hit)  # floor only
+    assert not hit.any()
 
 
 def test_as_slice_only_for_runs():
