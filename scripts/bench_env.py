@@ -477,7 +477,7 @@ def _section_profile(tof, steps: int) -> tuple[float, dict[str, float]]:
         wrap(u.pipeline, "step", "attention pipeline step (perception/pipeline.py)")
         wrap(u.pipeline.net, "update", "  of which DD-GNG learning cycle (net.update)")
         wrap(u.effectivity, "step", "effectivity (locomotion/effectivity.py)")
-        wrap(u.pool, "touching", "obstacle contact test (robot/obstacles.py touching)")
+        wrap(u.pool, "touching_any", "obstacle contact test (robot/obstacles.py touching_any)")
         wrap(u, "_get_obs", "observation (envs/obstacle.py _get_obs)")
         wrap(u, "_proprioception", "  of which proprioception (envs/base.py)")
         wrap(u.generator, "step", "CPG + motor-neuron pools (locomotion/generator.py)")
