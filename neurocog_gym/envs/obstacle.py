@@ -7,6 +7,8 @@ the effectivity predicts footholds and swing paths against the perceived obstacl
 
 Wall-clock perception timings are not in ``info`` (it must be deterministic for a seed); read
 ``env.unwrapped.pipeline.timings`` (last step) and ``env.unwrapped.perception_time`` (episode).
+``env.unwrapped.frame`` is the latest ToF frame (``ToFFrame``); its arrays are read-only views of
+the sensor's buffers that the next frame overwrites: copy them to keep them.
 
 Outcome of an episode (``info["outcome"]`` on its last step), from MuJoCo contacts and positions:
 

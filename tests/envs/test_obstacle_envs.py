@@ -175,6 +175,21 @@ def test_env_pipeline_drops_the_raw_point_additions_it_never_reads(noise):
     env.close()
 
 
+def test_env_frame_is_the_latest_and_read_only():
+    env = gym.make(SUDDEN)
+    env.reset(seed=0)
+    u = env.unwrapped
+    first = u.frame
+    with pytest.raises(ValueError):
+        first.points[0, 0] = 1.0  # the sensor's buffer: read-only for the env's users
+    for _ in range(5):  # 45 fps against 100 Hz cycles: a new frame within 3 cycles
+        env.step(np.zeros(15, np.float32))
+    assert u.frame is not first and u.frame.time > first.time
+    # The older frame's arrays view the same buffers: documented, copy a frame to keep it.
+    assert np.shares_memory(first.points, u.frame.points)
+    env.close()
+
+
 def test_graph_in_observation_behind_a_flag():
     env = gym.make(SUDDEN, include_graph=True, graph_max_nodes=256, graph_max_edges=1024)
     obs, _ = env.reset(seed=0)
