@@ -1,0 +1,287 @@
+"""SpinVectorEnv (neurocog_gym/vector.py): the same results as SyncVectorEnv, bit for bit, and
+clear errors instead of hangs."""
+
+import os
+import signal
+import time
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+from gymnasium.vector import SyncVectorEnv
+
+import neurocog_gym
+from neurocog_gym.vector import SpinVectorEnv, make_spin_vector
+
+SUDDEN = "NeuroCog/SuddenObstacle-v0"
+
+
+class _TinyEnv(gym.Env):
+    """A Dict-observation env whose info carries every kind of value Gymnasium batches."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, tag: int = 0, horizon: int = 5, fail_at: int | None = None):
+        self.tag, self.horizon, self.fail_at = tag, horizon, fail_at
+        self.observation_space = spaces.Dict(
+            {
+                "x": spaces.Box(-np.inf, np.inf, (3,), np.float32),
+                "k": spaces.Discrete(7),
+                "m": spaces.Box(0, 255, (2, 2), np.uint8),
+            }
+        )
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.t = 0
+        self.value = 0.0
+
+    def _obs(self):
+        x = np.array([self.value, self.t, self.tag], dtype=np.float32)
+        m = np.full((2, 2), (self.t * 17 + self.tag) % 256, dtype=np.uint8)
+        return {"x": x, "k": int(self.t % 7), "m": m}
+
+    def _info(self):
+        info = {
+            "f": float(self.value),
+            "i": self.t,
+            "b": self.t % 2 == 0,
+            "np32": np.float32(self.value),
+            "npbool": np.bool_(self.t > 2),
+            "s": f"t{self.t}",
+            "none": None,
+            "lst": [self.tag] * (self.t % 3),
+            "arr": np.arange(3.0) * self.t,
+            "nested": {"a": self.t, "b": "x"},
+        }
+        if self.t % 3 == 1:  # a key that only some steps report
+            info["sometimes"] = self.t
+        return info
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        self.value = float(self.np_random.uniform())
+        return self._obs(), self._info()
+
+    def step(self, action):
+        self.t += 1
+        if self.fail_at is not None and self.t >= self.fail_at:
+            raise ValueError(f"tiny env {self.tag} fails at step {self.t}")
+        self.value += float(np.sum(action)) + float(self.np_random.normal())
+        return self._obs(), self.value, self.t >= self.horizon, False, self._info()
+
+
+def _tiny(tag=0, **kw):
+    return lambda: _TinyEnv(tag, **kw)
+
+
+def _assert_same(a, b, where=""):
+    """Equal values, dtypes, shapes and key order, recursively; object arrays element-wise."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict), where
+        assert list(a) == list(b), f"{where}: keys {list(a)} != {list(b)}"
+        for key in a:
+            _assert_same(a[key], b[key], f"{where}/{key}")
+    elif isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray), where
+        assert a.dtype == b.dtype and a.shape == b.shape, f"{where}: {a.dtype}{a.shape} vs {b}"
+        if a.dtype == object:
+            for x, y in zip(a.ravel(), b.ravel(), strict=True):
+                _assert_same(x, y, where)
+        else:
+            assert np.array_equal(a, b, equal_nan=True), f"{where}: {a} != {b}"
+    elif isinstance(a, list):
+        assert a == b, where
+    else:
+        assert type(a) is type(b) and (a == b or (a != a and b != b)), f"{where}: {a!r} {b!r}"
+
+
+def _rollout(envs, steps, seed):
+    rng = np.random.default_rng(seed)
+    out = [envs.reset(seed=seed)]
+    for _ in range(steps):
+        action = rng.uniform(-1, 1, envs.action_space.shape).astype(np.float32)
+        out.append(envs.step(action))
+    return out
+
+
+def _compare(make_fns, steps, seed, **kwargs):
+    sync = SyncVectorEnv(make_fns)
+    spin = SpinVectorEnv(make_fns, **kwargs)
+    try:
+        for t, (a, b) in enumerate(
+            zip(_rollout(sync, steps, seed), _rollout(spin, steps, seed), strict=True)
+        ):
+            assert len(a) == len(b)
+            for part, (x, y) in enumerate(zip(a, b, strict=True)):
+                _assert_same(x, y, f"step {t} part {part}")
+    finally:
+        sync.close()
+        spin.close()
+
+
+def test_tiny_env_matches_sync_with_every_info_kind_and_autoreset():
+    # horizons 4 and 6: the sub-envs end and autoreset on different steps
+    _compare([_tiny(0, horizon=4), _tiny(1, horizon=6), _tiny(2, horizon=5)], 30, seed=11)
+
+
+def test_obstacle_env_matches_sync_bit_for_bit_through_autoresets():
+    # a 60-step time limit: both sub-envs truncate and reset inside the rollout
+    fns = [lambda: gym.make(SUDDEN, max_episode_steps=60)] * 2
+    _compare(fns, 150, seed=5)
+
+
+def test_make_vec_default_mode_is_spin_and_agrees_with_sync():
+    spin = gym.make_vec(SUDDEN, num_envs=2, max_episode_steps=30)
+    sync = gym.make_vec(SUDDEN, num_envs=2, vectorization_mode="sync", max_episode_steps=30)
+    try:
+        assert isinstance(spin, SpinVectorEnv)
+        assert isinstance(sync, SyncVectorEnv)
+        assert spin.observation_space == sync.observation_space
+        assert spin.action_space == sync.action_space
+        for t, (a, b) in enumerate(zip(_rollout(sync, 40, 2), _rollout(spin, 40, 2), strict=True)):
+            for part, (x, y) in enumerate(zip(a, b, strict=True)):
+                _assert_same(x, y, f"step {t} part {part}")
+    finally:
+        spin.close()
+        sync.close()
+    for env_id in neurocog_gym.ENV_IDS:
+        assert gym.spec(env_id).vector_entry_point.startswith("neurocog_gym.vector:")
+
+
+def test_merge_infos_is_gymnasiums_add_info():
+    envs = SpinVectorEnv([_tiny(0)] * 3)
+    try:
+        base = [_TinyEnv(i) for i in range(3)]
+        for e in base:
+            e.reset(seed=e.tag)
+        for _ in range(4):
+            infos = [e.step(np.zeros(2, np.float32))[4] for e in base]
+            expected = {}
+            for i, info in enumerate(infos):
+                expected = envs._add_info(expected, info, i)
+            _assert_same(expected, envs._merge_infos(infos))
+        # mixed types across sub-envs and differing key orders take Gymnasium's own path
+        mixed = [{"a": 1, "b": 2.0}, {"a": 2.5, "b": 2.0}, {"b": 1.0, "a": 3}]
+        expected = {}
+        for i, info in enumerate(mixed):
+            expected = envs._add_info(expected, info, i)
+        _assert_same(expected, envs._merge_infos(mixed))
+        assert envs._merge_infos([{}, {}, {}]) == {}
+    finally:
+        envs.close()
+
+
+def test_copy_false_returns_the_shared_views():
+    envs = SpinVectorEnv([_tiny(0), _tiny(1)], copy=False)
+    try:
+        obs, _ = envs.reset(seed=0)
+        first = obs["x"].copy()
+        obs2, *_ = envs.step(np.zeros((2, 2), np.float32))
+        assert obs2["x"] is obs["x"]  # the same buffer, overwritten in place
+        assert not np.array_equal(obs["x"], first)
+    finally:
+        envs.close()
+
+
+def test_call_get_set_attr_and_reset_mask():
+    envs = SpinVectorEnv([_tiny(0), _tiny(1), _tiny(2)])
+    try:
+        assert envs.get_attr("tag") == (0, 1, 2)
+        envs.set_attr("horizon", [2, 3, 4])
+        assert envs.get_attr("horizon") == (2, 3, 4)
+        envs.set_attr("horizon", 9)
+        assert envs.get_attr("horizon") == (9, 9, 9)
+        assert [o["x"][2] for o in envs.call("_obs")] == [0, 1, 2]  # a method, called in each
+        envs.reset(seed=[1, 2, 3])
+        envs.step(np.zeros((3, 2), np.float32))
+        obs, info = envs.reset(options={"reset_mask": np.array([False, True, False])})
+        assert obs["x"][1, 1] == 0 and obs["x"][0, 1] == 1 and obs["x"][2, 1] == 1
+        assert info["_i"].tolist() == [False, True, False]
+    finally:
+        envs.close()
+
+
+def test_disabled_autoreset_asks_for_a_reset():
+    envs = SpinVectorEnv([_tiny(0, horizon=1), _tiny(1, horizon=3)], autoreset_mode="Disabled")
+    try:
+        envs.reset(seed=0)
+        _, _, term, _, _ = envs.step(np.zeros((2, 2), np.float32))
+        assert term.tolist() == [True, False]
+        with pytest.raises(RuntimeError, match=r"Disabled.*\[0\]"):
+            envs.step(np.zeros((2, 2), np.float32))
+        envs.reset(options={"reset_mask": np.array([True, False])})
+        envs.step(np.zeros((2, 2), np.float32))
+    finally:
+        envs.close()
+
+
+def test_bad_arguments_are_clear_errors():
+    with pytest.raises(ValueError, match="at least one env factory"):
+        SpinVectorEnv([])
+    with pytest.raises(ValueError, match="SameStep"):
+        SpinVectorEnv([_tiny()], autoreset_mode="SameStep")
+    with pytest.raises(ValueError, match="payload_bytes"):
+        SpinVectorEnv([_tiny()], payload_bytes=10)
+    with pytest.raises(ValueError, match="spin_seconds"):
+        SpinVectorEnv([_tiny()], spin_seconds=-1)
+    with pytest.raises(ValueError, match="num_envs"):
+        make_spin_vector(SUDDEN, 0)
+    envs = SpinVectorEnv([_tiny(0), _tiny(1)])
+    try:
+        with pytest.raises(ValueError, match="num_envs=2"):
+            envs.reset(seed=[1, 2, 3])
+        with pytest.raises(ValueError, match="reset_mask"):
+            envs.reset(options={"reset_mask": [True, False]})
+    finally:
+        envs.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        envs.step(np.zeros((2, 2), np.float32))
+
+
+def test_worker_errors_surface_with_the_cause():
+    def broken():
+        raise OSError("no such model file")
+
+    with pytest.raises(RuntimeError, match="creating env 1 failed: OSError: no such model file"):
+        SpinVectorEnv([_tiny(0), broken])
+    envs = SpinVectorEnv([_tiny(0), _tiny(1, fail_at=2)])
+    try:
+        envs.reset(seed=0)
+        envs.step(np.zeros((2, 2), np.float32))
+        with pytest.raises(RuntimeError, match="env 1 raised: ValueError: tiny env 1 fails"):
+            envs.step(np.zeros((2, 2), np.float32))
+    finally:
+        envs.close()
+
+
+def test_a_killed_worker_is_an_error_not_a_hang():
+    envs = SpinVectorEnv([_tiny(0), _tiny(1)])
+    try:
+        envs.reset(seed=0)
+        pid = envs._procs[0].pid
+        os.kill(pid, signal.SIGKILL)
+        envs._procs[0].join(timeout=5)
+        t0 = time.perf_counter()
+        with pytest.raises(RuntimeError, match=r"worker for env 1 exited \(exit code -9\)"):
+            envs.step(np.zeros((2, 2), np.float32))
+        assert time.perf_counter() - t0 < 5
+    finally:
+        envs.close()
+
+
+def test_close_stops_the_workers_and_spin_budget_follows_the_cores():
+    envs = SpinVectorEnv([_tiny(i) for i in range(3)])
+    procs = list(envs._procs)
+    cpus = len(os.sched_getaffinity(0))
+    assert envs.spin_seconds == (2e-3 if 3 <= cpus else 0.0)
+    envs.reset(seed=0)
+    envs.step(np.zeros((3, 2), np.float32))
+    envs.close()
+    assert envs.closed
+    assert all(not p.is_alive() for p in procs)
+    single = SpinVectorEnv([_tiny(0)])  # one env: no worker at all
+    assert single._procs == []
+    single.reset(seed=0)
+    single.step(np.zeros((1, 2), np.float32))
+    single.close()
