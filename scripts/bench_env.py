@@ -8,8 +8,11 @@ processes falls on every row alike, and reported as medians over the rounds):
    cycle), zero actions (CPG walking; an episode ends when the robot passes the block or at 7 s,
    and resets are counted in the time), beside ``Ant-v5`` with uniform random actions; the same
    env at full sensor resolution (224 x 172 per sensor, 154,112 rays a frame); and
-   ``gymnasium.make_vec`` with 2 envs in ``async`` mode (one process each) and in ``sync`` mode
-   against 1 env in this process (env steps/s = vector steps/s x 2); then the time of each
+   ``gymnasium.make_vec`` with 2 envs in the registered vector entry point's mode (our
+   ``SpinVectorEnv``: env 0 in this process, env 1 in a spinning worker), in ``async`` mode
+   (Gymnasium's ``AsyncVectorEnv``, one process each) and in ``sync`` mode against 1 env in this
+   process (env steps/s = vector steps/s x 2; ratios also paired round by round); the lock-step
+   ceiling of recorded step times under both parallel vector envs; then the time of each
    stage of an obstacle-env step at default and full resolution. Writes ``--out``
    (docs/benchmarks_env.md).
 2. ``--part ppo``: stable-baselines3 PPO training throughput (env steps/s of ``model.learn``,
@@ -132,7 +135,7 @@ def _stepper(env, rng: np.random.Generator | None):
     return step, 1
 
 
-def _vec_stepper(env_id: str, mode: str, n: int):
+def _vec_stepper(env_id: str, mode: str | None, n: int):
     envs = gym.make_vec(env_id, num_envs=n, vectorization_mode=mode)
     envs.reset(seed=list(range(n)))
     zero = np.zeros((n, *envs.single_action_space.shape), envs.single_action_space.dtype)
@@ -143,8 +146,11 @@ def _vec_stepper(env_id: str, mode: str, n: int):
     return step, n, envs
 
 
-def _time_rows(rows: dict, rounds: int) -> dict[str, float]:
-    """Env steps/s of each row, median over interleaved rounds (rows: name -> (fn, per_call, n))."""
+def _time_rows(rows: dict, rounds: int, per_round_out: dict | None = None) -> dict[str, float]:
+    """Env steps/s of each row, median over interleaved rounds (rows: name -> (fn, per_call, n)).
+
+    ``per_round_out``, if given, receives every round's rate of every row (for paired ratios).
+    """
     for fn, _, n in rows.values():
         for _ in range(max(3, n // 10)):  # warm up: JIT, caches, worker start
             fn()
@@ -155,7 +161,15 @@ def _time_rows(rows: dict, rounds: int) -> dict[str, float]:
             for _ in range(n):
                 fn()
             per_round[name].append(n * per_call / (time.perf_counter() - t0))
+    if per_round_out is not None:
+        per_round_out.update(per_round)
     return {k: float(np.median(v)) for k, v in per_round.items()}
+
+
+def _paired(per_round: dict, a: str, b: str) -> tuple[float, float, float]:
+    """Median, min and max over rounds of row ``a``'s rate / row ``b``'s in the same round."""
+    r = np.array(per_round[a]) / np.array(per_round[b])
+    return float(np.median(r)), float(r.min()), float(r.max())
 
 
 def part_env(args: Args) -> tuple[list[str], float]:
@@ -176,17 +190,22 @@ def part_env(args: Args) -> tuple[list[str], float]:
         fn, per = _stepper(env, rng)
         rows[name] = (fn, per, n)
     vec_envs = []
-    for mode in ("async", "sync"):
+    for mode in (None, "async", "sync"):
         fn, per, envs = _vec_stepper(SUDDEN, mode, 2)
-        rows[f"vec_{mode}_2"] = (fn, per, args.vec_steps)
+        rows[f"vec_{mode or 'spin'}_2"] = (fn, per, args.vec_steps)
         vec_envs.append(envs)
+    spin_class = type(vec_envs[0]).__name__
     rays = full.n_rays
-    rate = _time_rows(rows, args.rounds)
+    per_round: dict[str, list[float]] = {}
+    rate = _time_rows(rows, args.rounds, per_round)
     for e in (sudden, sudden_full, ant, *vec_envs):
         e.close()
     load1, up1 = load_average(), _uptime()
     r_ant = rate["sudden"] / rate["ant"]
     r_vec = rate["vec_async_2"] / rate["sudden"]
+    r_spin = rate["vec_spin_2"] / rate["sudden"]
+    p_spin, lo_spin, hi_spin = _paired(per_round, "vec_spin_2", "sudden")
+    p_async = _paired(per_round, "vec_async_2", "sudden")[0]
     dt = 0.01
     lines = [
         "## Env throughput (`scripts/bench_env.py`)",
@@ -198,8 +217,10 @@ def part_env(args: Args) -> tuple[list[str], float]:
         "",
         f"Command: `python scripts/bench_env.py --part env --rounds {args.rounds} --steps "
         f"{args.steps} --full-steps {args.full_steps} --vec-steps {args.vec_steps}`. One process "
-        "(the async row adds two workers); rows timed interleaved in rounds, medians over "
-        f"{args.rounds} rounds; episode resets are inside the timed steps.",
+        "(the default make_vec row adds one worker, the async row two); rows timed interleaved in "
+        f"rounds, medians over {args.rounds} rounds (the vector rows' ratios: of the medians, and "
+        "in brackets the median of the per-round paired ratios); episode resets are inside the "
+        "timed steps.",
         "",
         "| row | env steps/s | simulated s per wall s | ratio | target | met |",
         "|---|---:|---:|---:|---:|:-:|",
@@ -210,14 +231,18 @@ def part_env(args: Args) -> tuple[list[str], float]:
         f"| `{SUDDEN}`, full-resolution sensing (4 x 224 x 172 = {rays:,} rays a frame) "
         f"| {rate['sudden_full']:,.0f} | {rate['sudden_full'] * dt:.2f} | | >= 100 steps/s "
         f"| {'yes' if rate['sudden_full'] >= 100 else 'no'} |",
-        f"| `gymnasium.make_vec({SUDDEN!r}, 2, 'async')` | {rate['vec_async_2']:,.0f} "
-        f"| {rate['vec_async_2'] * dt:.1f} | {r_vec:.2f}x 1 env | >= 1.6x "
-        f"| {'yes' if r_vec >= 1.6 else 'no'} |",
+        f"| `gymnasium.make_vec({SUDDEN!r}, 2)`: the registered vector entry point, "
+        f"`{spin_class}` (neurocog_gym/vector.py) | {rate['vec_spin_2']:,.0f} "
+        f"| {rate['vec_spin_2'] * dt:.1f} | {r_spin:.2f}x 1 env ({p_spin:.2f}x paired, rounds "
+        f"{lo_spin:.2f}-{hi_spin:.2f}) | >= 1.6x | {'yes' if r_spin >= 1.6 else 'no'} |",
+        f"| `gymnasium.make_vec({SUDDEN!r}, 2, 'async')`: Gymnasium's `AsyncVectorEnv` "
+        f"| {rate['vec_async_2']:,.0f} | {rate['vec_async_2'] * dt:.1f} | {r_vec:.2f}x 1 env "
+        f"({p_async:.2f}x paired) | >= 1.6x | {'yes' if r_vec >= 1.6 else 'no'} |",
         f"| `gymnasium.make_vec({SUDDEN!r}, 2, 'sync')` | {rate['vec_sync_2']:,.0f} "
         f"| {rate['vec_sync_2'] * dt:.1f} | {rate['vec_sync_2'] / rate['sudden']:.2f}x 1 env | | |",
         "",
         "Ant-v5's control step is 0.05 s (frame_skip 5 of 0.01 s); ours is 0.01 s. The async row "
-        "is taken apart in the next section.",
+        "is taken apart in the next section, with the lock-step ceiling both vector envs share.",
         "",
     ]
     return lines, rate["sudden"]
@@ -280,19 +305,33 @@ class _Replay(gym.Env):
 
 
 def _replay_rows(times: list[float], n: int) -> tuple[dict, list]:
-    """Timing rows: the replay stand-in alone, and two of it under ``AsyncVectorEnv``."""
+    """Timing rows: the replay stand-in alone, two of it under ``AsyncVectorEnv`` and two under
+    ``SpinVectorEnv`` (the second stand-in replays from the middle of the record)."""
+    from neurocog_gym.vector import SpinVectorEnv
+
     solo = _Replay(times)
     zero1 = np.zeros(15, np.float32)
-    pair = gym.vector.AsyncVectorEnv(
-        [lambda: _Replay(times), lambda: _Replay(times, offset=len(times) // 2)]
-    )
-    pair.reset(seed=[0, 1])
+    fns = [lambda: _Replay(times), lambda: _Replay(times, offset=len(times) // 2)]
+    pair = gym.vector.AsyncVectorEnv(fns)
+    spin = SpinVectorEnv(fns)
+    for envs in (pair, spin):
+        envs.reset(seed=[0, 1])
     zero2 = np.zeros((2, 15), np.float32)
     rows = {
         "stand-in alone": (lambda: solo.step(zero1), 1, n),
         "2 stand-ins, AsyncVectorEnv": (lambda: pair.step(zero2), 2, n),
+        "2 stand-ins, SpinVectorEnv": (lambda: spin.step(zero2), 2, n),
     }
-    return rows, [pair]
+    return rows, [pair, spin]
+
+
+def lock_step_bound(times: list[float]) -> float:
+    """2 x mean step time / mean of the slower of two steps: the most a lock-step vector env of
+    two envs with these step times can give (the second replays from the middle of the record),
+    with free communication and cores that do not slow each other."""
+    t = np.asarray(times, dtype=float)
+    other = np.roll(t, -(len(t) // 2))
+    return float(2.0 * t.mean() / np.maximum(t, other).mean())
 
 
 class _Tiny(gym.Wrapper):
@@ -390,6 +429,8 @@ def part_vec(args: Args, one_env: float) -> list[str]:
     for e in replay_envs:
         e.close()
     ceiling = replay["2 stand-ins, AsyncVectorEnv"] / replay["stand-in alone"]
+    ceiling_spin = replay["2 stand-ins, SpinVectorEnv"] / replay["stand-in alone"]
+    bound = lock_step_bound(times)
     seconds = 5.0
     alone = _solo_rate(seconds)
     with multiprocessing.get_context("fork").Pool(2) as pool:
@@ -428,7 +469,14 @@ def part_vec(args: Args, one_env: float) -> list[str]:
         f"{replay['stand-in alone']:,.0f} steps/s alone and "
         f"{replay['2 stand-ins, AsyncVectorEnv']:,.0f} as two under `AsyncVectorEnv` "
         f"(same rounds): {ceiling:.2f} ×. That is the most Gymnasium's lock-step workers can "
-        "give any env with these step times on this machine, before any of our observation.",
+        "give any env with these step times on this machine, before any of our observation. "
+        "Under `SpinVectorEnv` (one stand-in in this process, one in a spinning worker; shared "
+        f"memory, no pipe) two of them run at {replay['2 stand-ins, SpinVectorEnv']:,.0f}: "
+        f"{ceiling_spin:.2f} ×. The arithmetic bound of any lock-step pair on these times — "
+        "each vector step as long as the slower of two recorded steps, with free communication "
+        f"and cores that do not slow each other — is {bound:.2f} ×; two free env processes "
+        f"above reach {sum(pair) / alone:.2f} ×, i.e. each core runs an env "
+        f"{sum(pair) / alone / 2:.0%} as fast as one alone.",
         "",
     ]
     return lines

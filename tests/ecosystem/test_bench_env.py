@@ -21,9 +21,11 @@ def test_env_part_writes_every_row(tmp_path):
     text = out.read_text()
     for row in ("full perception, default settings", "`Ant-v5`, random actions",
                 "154,112 rays a frame", "'async')", "'sync')", "load average",
+                "2)`: the registered vector entry point",
                 "ToF sensing", "**whole step**", "| pinned + FlattenObservation |",
                 "two independent processes", "inside `env.step`",
-                "Ceiling: a stand-in env"):  # fmt: skip
+                "Ceiling: a stand-in env", "Under `SpinVectorEnv`",
+                "arithmetic bound"):  # fmt: skip
         assert row in text
 
 
@@ -53,3 +55,12 @@ def test_replay_stand_in_busy_waits_the_recorded_times():
         assert (reward, term, trunc, info) == (0.0, False, False, {})
     # offset 1 starts with the second time, then cycles: 4, 2, 4, 2 ms (never shorter)
     assert took[0] >= 0.004 and took[1] >= 0.002 and took[2] >= 0.004 and took[3] >= 0.002
+
+
+def test_lock_step_bound():
+    sys.path.insert(0, str(SCRIPT.parent))
+    import bench_env
+
+    assert bench_env.lock_step_bound([1.0, 1.0, 1.0, 1.0]) == 2.0
+    # steps 1, 3 against their partners 3, 1: every vector step lasts 3, the mean step 2
+    assert abs(bench_env.lock_step_bound([1.0, 3.0]) - 2 * 2.0 / 3.0) < 1e-12
