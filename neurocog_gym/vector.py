@@ -51,7 +51,7 @@ from gymnasium.vector.utils import (
 )
 from gymnasium.vector.vector_env import AutoresetMode, VectorEnv
 
-_STEP, _RESET, _CALL, _SET, _CLOSE = 1, 2, 3, 4, 5
+_STEP, _RESET, _CALL, _SET, _CLOSE, _APPLY = 1, 2, 3, 4, 5, 6
 _OK, _ERROR = 0, 1
 # ctrl fields of each worker (one int64 array in shared memory)
 _CMD_SEQ, _DONE_SEQ, _CMD, _NBYTES, _STATUS = range(5)
@@ -95,6 +95,25 @@ class _Slot:
     def call(self, name, args, kwargs):
         attr = getattr(self.env, name)
         return attr(*args, **kwargs) if callable(attr) else attr
+
+
+class _SameStepSlot(_Slot):
+    """stable-baselines3's VecEnv step: a finished env resets in the same step.
+
+    Its last observation goes in ``info["terminal_observation"]``, as in SB3's DummyVecEnv and
+    SubprocVecEnv.
+    """
+
+    RESET_INFO = "neurocog_spin_reset_info"
+    """Key under which the reset's info travels back (the SB3 adapter takes it out again)."""
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        info["TimeLimit.truncated"] = truncated and not terminated
+        if terminated or truncated:
+            info["terminal_observation"] = deepcopy(obs)
+            obs, info[self.RESET_INFO] = self.env.reset()
+        return obs, reward, terminated, truncated, info
 
 
 class _InfoPlan:
@@ -204,6 +223,7 @@ def _worker(
     mode,
     spin_seconds,
     parent,
+    slot_class=_Slot,
 ):
     writer = _ObsWriter(space, shm, num_envs)
     act = _action_view(act_raw, act_space)
@@ -213,7 +233,7 @@ def _worker(
     # the parent may send its first command before this process gets here: the count starts at 0
     seen = 0
     try:
-        slot = _Slot(env_fn.fn(), mode)
+        slot = slot_class(env_fn.fn(), mode)
         while True:
             # wait for the next command: spin, then poll (and leave if the parent is gone)
             if ctrl[_CMD_SEQ] == seen:
@@ -243,6 +263,9 @@ def _worker(
                     _put(buf, ctrl, info)
                 elif cmd == _CALL:
                     _put(buf, ctrl, slot.call(*_get(buf, ctrl)))
+                elif cmd == _APPLY:
+                    fn, args, kwargs = _get(buf, ctrl)
+                    _put(buf, ctrl, fn(slot.env, *args, **kwargs))
                 elif cmd == _SET:
                     name, value = _get(buf, ctrl)
                     setattr(slot.env, name, value)
@@ -295,6 +318,8 @@ class SpinVectorEnv(VectorEnv):
         spin_seconds: the spin budget in use.
     """
 
+    _slot_class: type[_Slot] = _Slot
+
     def __init__(
         self,
         env_fns: Sequence[Callable[[], gym.Env]],
@@ -328,7 +353,7 @@ class SpinVectorEnv(VectorEnv):
         self._closed = True
         self._procs: list = []
 
-        self._slot = _Slot(env_fns[0](), mode)
+        self._slot = self._slot_class(env_fns[0](), mode)
         env = self._slot.env
         self.metadata = dict(env.metadata)
         self.metadata["autoreset_mode"] = mode
@@ -367,6 +392,7 @@ class SpinVectorEnv(VectorEnv):
                     mode,
                     self.spin_seconds,
                     os.getpid(),
+                    self._slot_class,
                 ),
                 daemon=True,
             )
@@ -430,6 +456,37 @@ class SpinVectorEnv(VectorEnv):
             raise RuntimeError(f"SpinVectorEnv env {k + 1} raised: {result}")
         return result
 
+    def _gather(self, ks) -> dict:
+        """Receive the answers of workers ``ks``, then raise the first error if there was one.
+
+        All of them are received even after an error, so that no answer is left in a buffer that
+        the next command overwrites.
+        """
+        results, error = {}, None
+        for k in ks:
+            try:
+                results[k] = self._receive(k)
+            except RuntimeError as e:
+                error = error or e
+        if error is not None:
+            raise error
+        return results
+
+    def _local(self, ks, fn, *args):
+        """``fn(*args)`` in this process while workers ``ks`` work.
+
+        If it raises, the workers' answers are collected (and dropped) before the error goes on.
+        """
+        try:
+            return fn(*args)
+        except BaseException:
+            for k in ks:
+                try:
+                    self._receive(k)
+                except RuntimeError:
+                    pass
+            raise
+
     def _check_open(self) -> None:
         if self._closed:
             raise RuntimeError("SpinVectorEnv is closed")
@@ -462,17 +519,16 @@ class SpinVectorEnv(VectorEnv):
                     f"options['reset_mask'] must be a bool array of shape ({self.num_envs},) "
                     f"with at least one True value, got {mask!r}"
                 )
-        for k in range(self.num_envs - 1):
-            if mask[k + 1]:
-                self._send(k, _RESET, (seed[k + 1], options))
+        ks = [k for k in range(self.num_envs - 1) if mask[k + 1]]
+        for k in ks:
+            self._send(k, _RESET, (seed[k + 1], options))
         infos: dict[str, Any] = {}
         if mask[0]:
-            obs, info = self._slot.reset(seed[0], options)
+            obs, info = self._local(ks, self._slot.reset, seed[0], options)
             self._writer.write(0, obs)
             infos = self._add_info(infos, info, 0)
-        for k in range(self.num_envs - 1):
-            if mask[k + 1]:
-                infos = self._add_info(infos, self._receive(k), k + 1)
+        for k, info in self._gather(ks).items():
+            infos = self._add_info(infos, info, k + 1)
         self._terminations[mask] = False
         self._truncations[mask] = False
         return self._copy_obs(), infos
@@ -488,6 +544,20 @@ class SpinVectorEnv(VectorEnv):
                 f"autoreset_mode is 'Disabled' and envs {done.tolist()} ended: reset them with "
                 "options={'reset_mask': ...} before stepping"
             )
+        obs, infos = self._step_each(actions)
+        return (
+            obs,
+            np.copy(self._rewards),
+            np.copy(self._terminations),
+            np.copy(self._truncations),
+            self._merge_infos(infos),
+        )
+
+    def _step_each(self, actions) -> tuple[Any, list[dict]]:
+        """Step every sub-env; the batched observation (see ``copy``) and each sub-env's info.
+
+        Rewards and flags are left in ``self._rewards``, ``_terminations``, ``_truncations``.
+        """
         actions = list(iterate(self.action_space, actions))
         for k in range(self.num_envs - 1):
             act = self._act[k]
@@ -498,7 +568,8 @@ class SpinVectorEnv(VectorEnv):
                 ctrl = self._ctrl[k]
                 ctrl[_CMD] = _STEP
                 ctrl[_CMD_SEQ] += 1
-        obs, reward, terminated, truncated, info = self._slot.step(actions[0])
+        workers = range(self.num_envs - 1)
+        obs, reward, terminated, truncated, info = self._local(workers, self._slot.step, actions[0])
         self._writer.write(0, obs)
         self._rewards[0], self._terminations[0], self._truncations[0] = (
             reward,
@@ -506,19 +577,38 @@ class SpinVectorEnv(VectorEnv):
             truncated,
         )
         infos = [info]
-        for k in range(self.num_envs - 1):
-            reward, terminated, truncated, info = self._receive(k)
+        answers = self._gather(workers)
+        for k in workers:
+            reward, terminated, truncated, info = answers[k]
             self._rewards[k + 1] = reward
             self._terminations[k + 1] = terminated
             self._truncations[k + 1] = truncated
             infos.append(info)
-        return (
-            self._copy_obs(),
-            np.copy(self._rewards),
-            np.copy(self._terminations),
-            np.copy(self._truncations),
-            self._merge_infos(infos),
-        )
+        return self._copy_obs(), infos
+
+    def _apply(self, fn: Callable, indices: Sequence[int], *args, **kwargs) -> list:
+        """``fn(env, *args, **kwargs)`` for the sub-envs ``indices``, in order (``fn`` pickles)."""
+        unique = list(dict.fromkeys(int(i) for i in indices))
+        done = self._apply_each(fn, {i: args for i in unique}, kwargs)
+        return [done[int(i)] for i in indices]
+
+    def _apply_each(self, fn: Callable, calls: dict[int, tuple], kwargs: dict | None = None):
+        """``fn(env_i, *calls[i], **kwargs)`` for each sub-env ``i`` in ``calls``, in parallel."""
+        self._check_open()
+        kwargs = kwargs or {}
+        for i in calls:
+            if not 0 <= i < self.num_envs:
+                raise IndexError(f"env index {i} out of range for {self.num_envs} envs")
+        for i, args in calls.items():
+            if i > 0:
+                self._send(i - 1, _APPLY, (fn, args, kwargs))
+        ks = [i - 1 for i in calls if i > 0]
+        results = {}
+        if 0 in calls:
+            results[0] = self._local(ks, fn, self._slot.env, *calls[0], **kwargs)
+        for k, value in self._gather(ks).items():
+            results[k + 1] = value
+        return results
 
     def _copy_obs(self):
         """The batched observation: a copy (``copy=True``) or the shared views themselves."""
@@ -573,10 +663,12 @@ class SpinVectorEnv(VectorEnv):
     def call(self, name: str, *args, **kwargs) -> tuple:
         """Call method ``name`` (or read attribute ``name``) of every sub-env."""
         self._check_open()
-        for k in range(self.num_envs - 1):
+        workers = range(self.num_envs - 1)
+        for k in workers:
             self._send(k, _CALL, (name, args, kwargs))
-        first = self._slot.call(name, args, kwargs)
-        return (first, *(self._receive(k) for k in range(self.num_envs - 1)))
+        first = self._local(workers, self._slot.call, name, args, kwargs)
+        answers = self._gather(workers)
+        return (first, *(answers[k] for k in workers))
 
     def get_attr(self, name: str) -> tuple:
         """Attribute ``name`` of every sub-env."""
@@ -589,11 +681,11 @@ class SpinVectorEnv(VectorEnv):
             values = [values] * self.num_envs
         if len(values) != self.num_envs:
             raise ValueError(f"set_attr needs {self.num_envs} values, got {len(values)}")
-        for k in range(self.num_envs - 1):
+        workers = range(self.num_envs - 1)
+        for k in workers:
             self._send(k, _SET, (name, values[k + 1]))
-        setattr(self._slot.env, name, values[0])
-        for k in range(self.num_envs - 1):
-            self._receive(k)
+        self._local(workers, setattr, self._slot.env, name, values[0])
+        self._gather(workers)
 
     def render(self):
         """Each sub-env's ``render()`` (a tuple), or None without a render mode."""

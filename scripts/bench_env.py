@@ -585,7 +585,9 @@ def part_profile(args: Args) -> list[str]:
 # -- part ppo ------------------------------------------------------------------------------------
 
 
-def _ppo_rate(env_id: str, args: Args, seed: int) -> float:
+def _ppo_rate(
+    env_id: str, args: Args, seed: int, vec: str = "subproc", n_envs: int | None = None
+) -> float:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import tempfile
 
@@ -594,9 +596,9 @@ def _ppo_rate(env_id: str, args: Args, seed: int) -> float:
     with tempfile.TemporaryDirectory() as tmp:
         # The settings this section names (train_ppo's defaults when it was first measured).
         a = train_ppo.Args(
-            env_id=env_id, total_steps=args.ppo_steps, n_envs=args.ppo_envs, seed=seed,
-            n_steps=512, batch_size=256, normalize_obs=False, checkpoint_every=10**9, out=tmp,
-            tensorboard=False,
+            env_id=env_id, total_steps=args.ppo_steps, n_envs=n_envs or args.ppo_envs, seed=seed,
+            vec=vec, n_steps=512, batch_size=256, normalize_obs=False, checkpoint_every=10**9,
+            out=tmp, tensorboard=False,
         )  # fmt: skip
         return float(train_ppo.train(a)["steps_per_s"])
 
@@ -630,11 +632,17 @@ def _bench_rows(folders: tuple[str, ...]) -> list[str]:
 
 def part_ppo(args: Args) -> list[str]:
     load0, up0 = load_average(), _uptime()
-    rates: dict[str, list[float]] = {SUDDEN: [], "Ant-v5": []}
+    runs = {
+        SUDDEN: (SUDDEN, "subproc", None),
+        "spin": (SUDDEN, "spin", None),
+        "one": (SUDDEN, "dummy", 1),
+        "Ant-v5": ("Ant-v5", "subproc", None),
+    }
+    rates: dict[str, list[float]] = {k: [] for k in runs}
     for r in range(args.ppo_rounds):
-        for env_id in rates:
-            rates[env_id].append(_ppo_rate(env_id, args, seed=r))
-            print(f"round {r}: PPO on {env_id}: {rates[env_id][-1]:.0f} steps/s", flush=True)
+        for key, (env_id, vec, n) in runs.items():
+            rates[key].append(_ppo_rate(env_id, args, seed=r, vec=vec, n_envs=n))
+            print(f"round {r}: PPO on {env_id} ({vec}): {rates[key][-1]:.0f} steps/s", flush=True)
     med = {k: float(np.median(v)) for k, v in rates.items()}
     load1, up1 = load_average(), _uptime()
     lines = [
@@ -648,7 +656,8 @@ def part_ppo(args: Args) -> list[str]:
         f"Command: `python scripts/bench_env.py --part ppo --ppo-steps {args.ppo_steps} "
         f"--ppo-rounds {args.ppo_rounds} --ppo-envs {args.ppo_envs}`. Each round trains a fresh "
         f"PPO for {args.ppo_steps} env steps on each env in turn with `scripts/train_ppo.py` "
-        f"({args.ppo_envs} env(s), SubprocVecEnv, n_steps 512, batch 256, 10 epochs, "
+        f"({args.ppo_envs} env(s), SB3's SubprocVecEnv unless the row says otherwise, n_steps "
+        "512, batch 256, 10 epochs, "
         "128x128 networks, no observation normalisation, torch 1 thread); steps/s is env "
         "steps over the wall time of "
         "`model.learn` (rollouts and updates); medians over the rounds.",
@@ -657,6 +666,12 @@ def part_ppo(args: Args) -> list[str]:
         "|---|---|---:|---|---:|",
         f"| `{SUDDEN}` | MultiInputPolicy | {med[SUDDEN]:,.0f} | "
         f"{', '.join(f'{x:,.0f}' for x in rates[SUDDEN])} | {med[SUDDEN] / med['Ant-v5']:.2f}x |",
+        f"| `{SUDDEN}`, `--vec spin` (neurocog_gym.sb3_vec.SpinVecEnv) | MultiInputPolicy "
+        f"| {med['spin']:,.0f} | {', '.join(f'{x:,.0f}' for x in rates['spin'])} "
+        f"| {med['spin'] / med['Ant-v5']:.2f}x ({med['spin'] / med[SUDDEN]:.2f}x SubprocVecEnv, "
+        f"{med['spin'] / med['one']:.2f}x one env) |",
+        f"| `{SUDDEN}`, 1 env, `--vec dummy` | MultiInputPolicy | {med['one']:,.0f} "
+        f"| {', '.join(f'{x:,.0f}' for x in rates['one'])} | {med['one'] / med['Ant-v5']:.2f}x |",
         f"| `Ant-v5` | MlpPolicy | {med['Ant-v5']:,.0f} | "
         f"{', '.join(f'{x:,.0f}' for x in rates['Ant-v5'])} | 1 |",
         "",

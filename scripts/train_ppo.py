@@ -51,8 +51,11 @@ class Args:
     """Env steps in all (over every env), resumed runs included."""
     n_envs: int = 2
     """Parallel envs."""
-    vec: str = "subproc"
-    """subproc (one process per env, SubprocVecEnv) or dummy (in this process)."""
+    vec: str = "spin"
+    """spin (env 0 in this process, the others in spinning shared-memory workers:
+    neurocog_gym.sb3_vec.SpinVecEnv; 1.64x SubprocVecEnv's PPO steps/s here,
+    docs/benchmarks_ppo.md), subproc (one process per env, SB3's SubprocVecEnv) or dummy (all in
+    this process)."""
     seed: int = 0
     """Seed of the envs (env i gets seed + i), the policy initialisation and the sampling."""
     n_steps: int = 2048
@@ -119,8 +122,8 @@ def parse_args(argv: list[str] | None = None) -> Args:
     args = Args(**vars(parser.parse_args(argv)))
     if args.total_steps < 1 or args.n_envs < 1 or args.n_steps < 2 or args.batch_size < 2:
         parser.error("--total-steps, --n-envs must be >= 1; --n-steps, --batch-size >= 2")
-    if args.vec not in ("subproc", "dummy"):
-        parser.error(f"--vec must be subproc or dummy, got {args.vec!r}")
+    if args.vec not in ("subproc", "spin", "dummy"):
+        parser.error(f"--vec must be subproc, spin or dummy, got {args.vec!r}")
     if args.checkpoint_every < 1 or args.max_minutes < 0 or args.target_kl < 0:
         parser.error("--checkpoint-every must be >= 1, --max-minutes >= 0, --target-kl >= 0")
     try:
@@ -149,7 +152,11 @@ def _make_vec_env(args: Args):
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    cls = SubprocVecEnv if args.vec == "subproc" and args.n_envs > 1 else DummyVecEnv
+    from neurocog_gym.sb3_vec import SpinVecEnv
+
+    cls = {"subproc": SubprocVecEnv, "spin": SpinVecEnv}.get(args.vec, DummyVecEnv)
+    if args.n_envs == 1:
+        cls = DummyVecEnv
     make = functools.partial(_make_one, args.env_id)
     return make_vec_env(make, n_envs=args.n_envs, seed=args.seed, vec_env_cls=cls)
 

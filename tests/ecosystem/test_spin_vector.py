@@ -285,3 +285,68 @@ def test_close_stops_the_workers_and_spin_budget_follows_the_cores():
     single.reset(seed=0)
     single.step(np.zeros((1, 2), np.float32))
     single.close()
+
+
+def _sb3_rollout(venv, steps, seed):
+    rng = np.random.default_rng(seed)
+    out = [venv.reset()]
+    for _ in range(steps):
+        actions = rng.uniform(-1, 1, (venv.num_envs, *venv.action_space.shape)).astype(np.float32)
+        obs, rewards, dones, infos = venv.step(actions)
+        for info in infos:
+            info.get("episode", {}).pop("t", None)  # Monitor's wall-clock time
+        out.append((obs, rewards, dones, infos))
+    return out
+
+
+def test_sb3_spin_vec_env_matches_dummy_vec_env():
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from neurocog_gym.sb3_vec import SpinVecEnv
+
+    kw = dict(n_envs=2, seed=3, env_kwargs={"max_episode_steps": 40})
+    dummy = make_vec_env(SUDDEN, vec_env_cls=DummyVecEnv, **kw)
+    spin = make_vec_env(SUDDEN, vec_env_cls=SpinVecEnv, **kw)
+    try:
+        a, b = _sb3_rollout(dummy, 90, 1), _sb3_rollout(spin, 90, 1)
+        ended = 0
+        for t, (x, y) in enumerate(zip(a, b, strict=True)):
+            if t == 0:
+                _assert_same(x, y, "reset")
+                continue
+            _assert_same(x[0], y[0], f"step {t} obs")
+            for part in (1, 2):
+                assert x[part].dtype == y[part].dtype and np.array_equal(x[part], y[part]), t
+            assert len(x[3]) == len(y[3]) == 2
+            for i, (p, q) in enumerate(zip(x[3], y[3], strict=True)):
+                _assert_same(p, q, f"step {t} info {i}")
+                ended += "terminal_observation" in p
+        assert ended >= 4  # both sub-envs ended (time limit 40) and reset in the rollout
+        assert spin.reset_infos[0].keys() == dummy.reset_infos[0].keys()
+        assert spin.get_attr("render_mode") == dummy.get_attr("render_mode")
+        assert spin.env_is_wrapped(Monitor) == [True, True]
+        assert spin.env_is_wrapped(Monitor, indices=[1]) == [True]
+        assert spin.env_method("get_wrapper_attr", "spec", indices=1)[0].id == SUDDEN
+        spin.set_attr("neurocog_test_flag", 7, indices=[1])
+        assert spin.get_attr("neurocog_test_flag", indices=[1]) == [7]
+        with pytest.raises(IndexError, match="out of range"):
+            spin.get_attr("render_mode", indices=[2])
+    finally:
+        dummy.close()
+        spin.close()
+
+
+def test_sb3_ppo_learns_a_few_steps_on_spin_vec_env():
+    from stable_baselines3 import PPO
+
+    from neurocog_gym.sb3_vec import SpinVecEnv
+
+    venv = SpinVecEnv([lambda: gym.make(SUDDEN, max_episode_steps=30)] * 2)
+    try:
+        model = PPO("MultiInputPolicy", venv, n_steps=32, batch_size=32, n_epochs=1, seed=0)
+        model.learn(64)
+        assert model.num_timesteps == 64
+    finally:
+        venv.close()

@@ -34,7 +34,7 @@ def test_train_resume_and_bench_the_model(tmp_path):
     r = _run(str(SCRIPT), "--total-steps", "256", "--out", str(out), *TINY)
     assert r.returncode == 0, r.stderr
     s = json.loads((out / "train_summary.json").read_text())
-    assert s["total_steps"] == 256 and s["n_envs"] == 2 and s["vec"] == "subproc"
+    assert s["total_steps"] == 256 and s["n_envs"] == 2 and s["vec"] == "spin"
     assert (out / "model.zip").is_file()
     assert (out / "vecnormalize.pkl").is_file()  # observation statistics beside the model
     assert s["normalize_obs"] is True
@@ -124,3 +124,13 @@ def test_outcome_callback_counts_blocks_kept_away():
     assert cb.counts == {"success": 0, "touch": 2, "fail": 2}
     assert cb.fails == {"fell": 1, "stuck": 1}
     assert cb.blocks == {"forced": 1, "none": 1}
+
+
+def test_train_with_subproc_vec_env(tmp_path):
+    out = tmp_path / "ppo_subproc"
+    r = _run(str(SCRIPT), "--total-steps", "128", "--out", str(out), "--vec", "subproc",
+             "--no-tensorboard", *TINY)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    s = json.loads((out / "train_summary.json").read_text())
+    assert s["total_steps"] == 128 and s["n_envs"] == 2 and s["vec"] == "subproc"
+    assert (out / "model.zip").is_file()
