@@ -42,9 +42,11 @@ def _vec_rollout(env_id, mode, steps=5):
 def test_make_vec_sync_and_async_agree(env_id):
     sync = _vec_rollout(env_id, "sync")
     asyn = _vec_rollout(env_id, "async")
+    spin = _vec_rollout(env_id, "vector_entry_point")  # SpinVectorEnv, make_vec's default here
     assert sync.shape == (6, 2, 12)
-    # same seeds, same actions: the async workers reproduce the in-process envs bit for bit
+    # same seeds, same actions: the workers of both reproduce the in-process envs bit for bit
     assert np.array_equal(sync, asyn)
+    assert np.array_equal(sync, spin)
     # and the two sub-envs (seeds 3 and 4) are different episodes
     assert not np.array_equal(sync[:, 0], sync[:, 1])
 
