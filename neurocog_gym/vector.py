@@ -65,6 +65,30 @@ _NAP_SHARE = 0.05
 ends at most ~5 % of T late, and a long-idle process costs the machine next to nothing."""
 
 
+_PROC = os.path.isdir("/proc/self")
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` (the vector env's) still runs; a worker leaves once it is gone.
+
+    Not ``os.getppid()``: under the forkserver start method a worker's parent is the server. A
+    process that has exited but is not reaped yet (a zombie) counts as gone.
+    """
+    if _PROC:
+        try:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+        except FileNotFoundError:
+            return False
+    try:  # no /proc: ask the kernel whether the pid exists
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
 def _nap(since: float) -> None:
     """Sleep once while polling, for longer the longer the wait that began at ``since`` lasts."""
     time.sleep(min(_SLEEP_MAX, max(_SLEEP, (time.perf_counter() - since) * _NAP_SHARE)))
@@ -232,6 +256,13 @@ def _worker(
     slot = None
     # the parent may send its first command before this process gets here: the count starts at 0
     seen = 0
+    # fork and spawn: the vector env's process is this one's parent (reparented when it dies);
+    # forkserver: the server is, and the vector env's process is asked by pid
+    direct = os.getppid() == parent
+
+    def parent_alive() -> bool:
+        return os.getppid() == parent if direct else _alive(parent)
+
     try:
         slot = slot_class(env_fn.fn(), mode)
         while True:
@@ -246,7 +277,7 @@ def _worker(
                         break
                 while ctrl[_CMD_SEQ] == seen:  # then poll
                     _nap(since)
-                    if os.getppid() != parent:
+                    if not parent_alive():
                         return
             seen = int(ctrl[_CMD_SEQ])
             cmd = int(ctrl[_CMD])
@@ -283,7 +314,7 @@ def _worker(
                 return
     except Exception as e:  # the factory failed: report it on the first command
         message = f"creating env {index} failed: {type(e).__name__}: {e}\n{traceback.format_exc()}"
-        while os.getppid() == parent:
+        while parent_alive():
             if ctrl[_CMD_SEQ] != seen:
                 seen = int(ctrl[_CMD_SEQ])
                 _put(buf, ctrl, message)

@@ -350,3 +350,55 @@ def test_sb3_ppo_learns_a_few_steps_on_spin_vec_env():
         assert model.num_timesteps == 64
     finally:
         venv.close()
+
+
+@pytest.mark.parametrize("context", ["forkserver", "spawn"])
+def test_other_start_methods(context):
+    # the env factory is pickled by value (cloudpickle), the worker function imported
+    fns = [lambda: gym.make(SUDDEN, max_episode_steps=20)] * 2
+    spin = SpinVectorEnv(fns, context=context)
+    sync = SyncVectorEnv(fns)
+    try:
+        for t, (a, b) in enumerate(zip(_rollout(sync, 25, 4), _rollout(spin, 25, 4), strict=True)):
+            for part, (x, y) in enumerate(zip(a, b, strict=True)):
+                _assert_same(x, y, f"{context} step {t} part {part}")
+    finally:
+        spin.close()
+        sync.close()
+
+
+@pytest.mark.parametrize("context", ["fork", "forkserver"])
+def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
+    import subprocess
+    import sys
+
+    script = tmp_path / "die.py"
+    script.write_text(
+        "import os, sys, numpy as np, gymnasium as gym\n"
+        "from neurocog_gym.vector import SpinVectorEnv\n"
+        "def make():\n"
+        "    return gym.make('NeuroCog/Walk-v0')\n"
+        "if __name__ == '__main__':\n"
+        f"    v = SpinVectorEnv([make, make], context={context!r})\n"
+        "    v.reset(seed=0)\n"
+        "    print(v._procs[0].pid, flush=True)\n"
+        "    os._exit(0)  # no close: the worker must notice on its own\n"
+    )
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    pid = int(r.stdout.split()[0])
+
+    def running() -> bool:  # an exited process whose zombie is not reaped yet counts as gone
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+        except FileNotFoundError:
+            return False
+
+    deadline = time.time() + 10
+    while time.time() < deadline:
+        if not running():
+            break
+        time.sleep(0.1)
+    else:
+        pytest.fail(f"worker {pid} still runs 10 s after its vector env's process died")
