@@ -105,19 +105,22 @@ def _rollout(envs, steps, seed):
     return out
 
 
-def _compare(make_fns, steps, seed, **kwargs):
-    sync = SyncVectorEnv(make_fns)
-    spin = SpinVectorEnv(make_fns, **kwargs)
+def _assert_same_rollouts(sync, spin, steps, seed, label=""):
+    """The same seeded random-action rollout on both vector envs gives the same results."""
     try:
         for t, (a, b) in enumerate(
             zip(_rollout(sync, steps, seed), _rollout(spin, steps, seed), strict=True)
         ):
             assert len(a) == len(b)
             for part, (x, y) in enumerate(zip(a, b, strict=True)):
-                _assert_same(x, y, f"step {t} part {part}")
+                _assert_same(x, y, f"{label}step {t} part {part}")
     finally:
         sync.close()
         spin.close()
+
+
+def _compare(make_fns, steps, seed, **kwargs):
+    _assert_same_rollouts(SyncVectorEnv(make_fns), SpinVectorEnv(make_fns, **kwargs), steps, seed)
 
 
 def test_tiny_env_matches_sync_with_every_info_kind_and_autoreset():
@@ -134,17 +137,11 @@ def test_obstacle_env_matches_sync_bit_for_bit_through_autoresets():
 def test_make_vec_default_mode_is_spin_and_agrees_with_sync():
     spin = gym.make_vec(SUDDEN, num_envs=2, max_episode_steps=30)
     sync = gym.make_vec(SUDDEN, num_envs=2, vectorization_mode="sync", max_episode_steps=30)
-    try:
-        assert isinstance(spin, SpinVectorEnv)
-        assert isinstance(sync, SyncVectorEnv)
-        assert spin.observation_space == sync.observation_space
-        assert spin.action_space == sync.action_space
-        for t, (a, b) in enumerate(zip(_rollout(sync, 40, 2), _rollout(spin, 40, 2), strict=True)):
-            for part, (x, y) in enumerate(zip(a, b, strict=True)):
-                _assert_same(x, y, f"step {t} part {part}")
-    finally:
-        spin.close()
-        sync.close()
+    assert isinstance(spin, SpinVectorEnv)
+    assert isinstance(sync, SyncVectorEnv)
+    assert spin.observation_space == sync.observation_space
+    assert spin.action_space == sync.action_space
+    _assert_same_rollouts(sync, spin, 40, 2)
     for env_id in neurocog_gym.ENV_IDS:
         assert gym.spec(env_id).vector_entry_point.startswith("neurocog_gym.vector:")
 
@@ -356,15 +353,7 @@ def test_sb3_ppo_learns_a_few_steps_on_spin_vec_env():
 def test_other_start_methods(context):
     # the env factory is pickled by value (cloudpickle), the worker function imported
     fns = [lambda: gym.make(SUDDEN, max_episode_steps=20)] * 2
-    spin = SpinVectorEnv(fns, context=context)
-    sync = SyncVectorEnv(fns)
-    try:
-        for t, (a, b) in enumerate(zip(_rollout(sync, 25, 4), _rollout(spin, 25, 4), strict=True)):
-            for part, (x, y) in enumerate(zip(a, b, strict=True)):
-                _assert_same(x, y, f"{context} step {t} part {part}")
-    finally:
-        spin.close()
-        sync.close()
+    _assert_same_rollouts(SyncVectorEnv(fns), SpinVectorEnv(fns, context=context), 25, 4, context)
 
 
 @pytest.mark.parametrize("context", ["fork", "forkserver"])
