@@ -49,7 +49,8 @@ def describe(env_id: str) -> dict:
     """Build ``env_id`` once (no rendering) and describe it.
 
     Returns:
-        ``id``, ``entry_point``, ``summary`` (first docstring line), ``max_episode_steps``,
+        ``id``, ``entry_point``, ``vector_entry_point`` (what ``gymnasium.make_vec`` builds by
+        default), ``summary`` (first docstring line), ``max_episode_steps``,
         ``dt`` (s per step), ``episode_seconds``, ``action_space`` (text), ``observation``
         (key -> space text; a single ``"obs"`` key for non-Dict spaces) and ``parameters``
         (list of ``{name, default, defined_in}``).
@@ -70,6 +71,7 @@ def describe(env_id: str) -> dict:
         return {
             "id": env_id,
             "entry_point": spec.entry_point,
+            "vector_entry_point": spec.vector_entry_point,
             "summary": (inspect.getdoc(cls) or "").splitlines()[0],
             "max_episode_steps": steps,
             "dt": float(u.dt),
@@ -90,6 +92,8 @@ def format_text(desc: dict) -> str:
     lines = [
         f"{desc['id']}  ({desc['entry_point']})",
         f"  {desc['summary']}",
+        f"  gymnasium.make_vec(id, n): {desc['vector_entry_point']} (SpinVectorEnv; "
+        "vectorization_mode='sync' / 'async' for Gymnasium's own)",
         f"  episode: {desc['max_episode_steps']} steps x {desc['dt']:g} s = "
         f"{desc['episode_seconds']:g} s (truncated by the time limit)",
         f"  action: {desc['action_space']}  (12 joint interrupts, 3 walking provisions)",

@@ -43,6 +43,7 @@ def test_info_json_matches_the_registry(capsys):
     for d in descs:
         env = gym.make(d["id"])
         assert d["max_episode_steps"] == gym.spec(d["id"]).max_episode_steps
+        assert d["vector_entry_point"] == gym.spec(d["id"]).vector_entry_point
         assert d["episode_seconds"] == pytest.approx(d["max_episode_steps"] * env.unwrapped.dt)
         assert set(d["observation"]) == set(env.observation_space.spaces)
         assert d["action_space"].startswith("Box(-1, 1, (15,)")
@@ -59,6 +60,7 @@ def test_info_text_one_env(capsys):
     assert cli.main(["info", "--env", "NeuroCog/Walk-v0"]) == 0
     out = capsys.readouterr().out
     assert "NeuroCog/Walk-v0" in out and "2000 steps" in out and "joint_pos" in out
+    assert "make_vec(id, n): neurocog_gym.vector:walk_vector" in out
     assert "SuddenObstacle" not in out
 
 
