@@ -10,18 +10,25 @@ What this one does instead:
 
 * env 0 steps in the calling process, while envs 1..n-1 step in worker processes at the same
   time (a 2-env vector env needs one worker, not two);
-* commands, actions, rewards, flags and ``info`` pass through a per-worker shared buffer
-  (pickled), observations through Gymnasium's shared-memory layout
-  (``gymnasium.vector.utils.create_shared_memory``); no system call per step;
-* each side waits for the other by spinning on a shared counter for up to ``spin_seconds``, then
-  by polling with sleeps that grow with the wait (0.2 ms up to 20 ms, 5 % of the time waited so
-  far), so that a worker idles cheaply while the caller trains a network or steps other envs.
+* observations go through Gymnasium's shared-memory layout
+  (``gymnasium.vector.utils.create_shared_memory``), written through views made once; a Box
+  action through a shared row per worker; rewards, flags and ``info`` through a per-worker
+  shared buffer (pickled); no pipe, no wake-up;
+* each side waits for the other by spinning on a shared counter (yielding the core on every
+  turn) for up to ``spin_seconds``, then by polling with sleeps that grow with the wait (0.2 ms
+  up to 20 ms, 5 % of the time waited so far), so that a worker idles cheaply (about 1 % of a
+  core) while the caller trains a network or steps other envs;
+* infos are batched by a cached plan into exactly what ``VectorEnv._add_info`` makes.
 
 The results are those of ``SyncVectorEnv`` on the same env factories, bit for bit (the same
-seeding, the same next-step autoreset, the same info layout; ``tests/test_vector.py``). The
-lock-step still costs: each vector step lasts as long as the slower env's step, and these
-steps vary (a ToF frame every 2.2 cycles), which bounds any lock-step vector env of two such
-envs at about 1.65 x one env even with free communication.
+seeding, the same next-step autoreset, the same info layout; ``tests/ecosystem/
+test_spin_vector.py``). The lock-step still costs: each vector step lasts as long as the slower
+env's step, and these steps vary (a ToF frame every 2.2 cycles, a 15 ms reset every few hundred
+steps), which bounds any lock-step vector env of two such envs at about 1.7 x one env even with
+free communication (``scripts/bench_env.py``); this one reaches 1.3-1.45 x with the obstacle env.
+
+:class:`neurocog_gym.sb3_vec.SpinVecEnv` puts stable-baselines3's ``VecEnv`` API on the same
+workers.
 
 The counter protocol relies on stores becoming visible in program order, which x86-64 gives;
 other architectures are untested.
@@ -56,6 +63,10 @@ _OK, _ERROR = 0, 1
 # ctrl fields of each worker (one int64 array in shared memory)
 _CMD_SEQ, _DONE_SEQ, _CMD, _NBYTES, _STATUS = range(5)
 _SCALARS = (int, float, bool)
+_yield = getattr(os, "sched_yield", lambda: None)
+"""Called on every turn of a spin: lets anything else runnable have the core, and on this VM the
+other env's step slows less beside a yielding spin than beside a plain one (0.49-0.50 against
+0.54-0.55 ms; 0.47 alone)."""
 _SLEEP = 2e-4
 """Shortest poll interval once the spin budget is spent, s."""
 _SLEEP_MAX = 2e-2
@@ -271,9 +282,10 @@ def _worker(
                 since = time.perf_counter()
                 deadline = since + spin_seconds
                 n = 0
-                while ctrl[_CMD_SEQ] == seen:  # spin (the clock read once in 1024 turns)
+                while ctrl[_CMD_SEQ] == seen:  # spin, yielding the core each turn
+                    _yield()
                     n += 1
-                    if n & 1023 == 0 and time.perf_counter() > deadline:
+                    if n & 15 == 0 and time.perf_counter() > deadline:
                         break
                 while ctrl[_CMD_SEQ] == seen:  # then poll
                     _nap(since)
@@ -470,9 +482,10 @@ class SpinVectorEnv(VectorEnv):
             since = time.perf_counter()
             deadline = since + self.spin_seconds
             n = 0
-            while ctrl[_DONE_SEQ] != target:  # spin (the clock read once in 1024 turns)
+            while ctrl[_DONE_SEQ] != target:  # spin, yielding the core each turn
+                _yield()
                 n += 1
-                if n & 1023 == 0 and time.perf_counter() > deadline:
+                if n & 15 == 0 and time.perf_counter() > deadline:
                     break
             while ctrl[_DONE_SEQ] != target:  # then poll
                 _nap(since)
