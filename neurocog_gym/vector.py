@@ -324,6 +324,8 @@ def _worker(
             ctrl[_DONE_SEQ] = seen
             if cmd == _CLOSE:
                 return
+    except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: leave quietly
+        return
     except Exception as e:  # the factory failed: report it on the first command
         message = f"creating env {index} failed: {type(e).__name__}: {e}\n{traceback.format_exc()}"
         while parent_alive():

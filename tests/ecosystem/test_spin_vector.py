@@ -391,3 +391,37 @@ def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
         time.sleep(0.1)
     else:
         pytest.fail(f"worker {pid} still runs 10 s after its vector env's process died")
+
+
+def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
+    import subprocess
+    import sys
+
+    script = tmp_path / "interrupt.py"
+    script.write_text(
+        "import numpy as np, gymnasium as gym\n"
+        "from neurocog_gym.vector import SpinVectorEnv\n"
+        "def make():\n"
+        "    return gym.make('NeuroCog/Walk-v0')\n"
+        "if __name__ == '__main__':\n"
+        "    v = SpinVectorEnv([make, make])\n"
+        "    v.reset(seed=0)\n"
+        "    print(v._procs[0].pid, flush=True)\n"
+        "    try:\n"
+        "        while True:\n"
+        "            v.step(np.zeros((2, 15), np.float32))\n"
+        "    except KeyboardInterrupt:\n"
+        "        v.close()\n"
+        "        print('interrupted', flush=True)\n"
+    )
+    proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)  # fmt: skip
+    pid = int(proc.stdout.readline())
+    time.sleep(1.0)
+    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+    out, err = proc.communicate(timeout=60)
+    assert "interrupted" in out, err
+    assert "Traceback" not in err, err
+    assert proc.returncode == 0
+    with pytest.raises(ProcessLookupError):
+        os.kill(pid, 0)
