@@ -258,7 +258,18 @@ class _StepClock(gym.Wrapper):
         super().__init__(env)
         self.inside: list[float] = []
         self.between: list[float] = []
+        self.calls: list[float] = []
+        """Every step's and every later reset's time, in order (an autoreset is a vector step)."""
+        self.resets = 0
         self._end: float | None = None
+
+    def reset(self, **kwargs):
+        t0 = time.perf_counter()
+        out = self.env.reset(**kwargs)
+        if self._end is not None:  # not the first reset: it takes a vector step's place
+            self.calls.append(time.perf_counter() - t0)
+            self.resets += 1
+        return out
 
     def step(self, action):
         t0 = time.perf_counter()
@@ -267,6 +278,7 @@ class _StepClock(gym.Wrapper):
         out = self.env.step(action)
         self._end = time.perf_counter()
         self.inside.append(self._end - t0)
+        self.calls.append(self._end - t0)
         return out
 
     def clock(self) -> tuple[float, float]:
@@ -276,6 +288,10 @@ class _StepClock(gym.Wrapper):
     def samples(self) -> list[float]:
         """Every recorded time inside ``step``, s, in order."""
         return list(self.inside)
+
+    def timeline(self) -> tuple[list[float], int]:
+        """Step and reset times in order, s, and how many of them are resets."""
+        return list(self.calls), self.resets
 
 
 class _Replay(gym.Env):
@@ -421,6 +437,7 @@ def part_vec(args: Args, one_env: float) -> list[str]:
         fn()
     clocks = envs.call("clock")
     times = envs.call("samples")[0]
+    timeline, n_resets = envs.call("timeline")[0]
     envs.close()
     inside = float(np.mean([c[0] for c in clocks]))
     between = float(np.mean([c[1] for c in clocks]))
@@ -431,6 +448,7 @@ def part_vec(args: Args, one_env: float) -> list[str]:
     ceiling = replay["2 stand-ins, AsyncVectorEnv"] / replay["stand-in alone"]
     ceiling_spin = replay["2 stand-ins, SpinVectorEnv"] / replay["stand-in alone"]
     bound = lock_step_bound(times)
+    bound_resets = lock_step_bound(timeline)
     seconds = 5.0
     alone = _solo_rate(seconds)
     with multiprocessing.get_context("fork").Pool(2) as pool:
@@ -474,7 +492,10 @@ def part_vec(args: Args, one_env: float) -> list[str]:
         f"memory, no pipe) two of them run at {replay['2 stand-ins, SpinVectorEnv']:,.0f}: "
         f"{ceiling_spin:.2f} ×. The arithmetic bound of any lock-step pair on these times — "
         "each vector step as long as the slower of two recorded steps, with free communication "
-        f"and cores that do not slow each other — is {bound:.2f} ×; two free env processes "
+        f"and cores that do not slow each other — is {bound:.2f} ×, and {bound_resets:.2f} × with "
+        f"the {n_resets} autoresets of that worker's record among the step times (a reset takes "
+        f"{np.median([t for t in timeline if t > 5e-3] or [0.0]) * 1e3:.0f} ms, and the other env "
+        "waits it out); two free env processes "
         f"above reach {sum(pair) / alone:.2f} ×, i.e. each core runs an env "
         f"{sum(pair) / alone / 2:.0%} as fast as one alone.",
         "",

@@ -25,7 +25,7 @@ def test_env_part_writes_every_row(tmp_path):
                 "ToF sensing", "**whole step**", "| pinned + FlattenObservation |",
                 "two independent processes", "inside `env.step`",
                 "Ceiling: a stand-in env", "Under `SpinVectorEnv`",
-                "arithmetic bound"):  # fmt: skip
+                "arithmetic bound", "autoresets of that worker's record"):  # fmt: skip
         assert row in text
 
 
@@ -64,3 +64,21 @@ def test_lock_step_bound():
     assert bench_env.lock_step_bound([1.0, 1.0, 1.0, 1.0]) == 2.0
     # steps 1, 3 against their partners 3, 1: every vector step lasts 3, the mean step 2
     assert abs(bench_env.lock_step_bound([1.0, 3.0]) - 2 * 2.0 / 3.0) < 1e-12
+
+
+def test_step_clock_puts_later_resets_in_the_timeline():
+    sys.path.insert(0, str(SCRIPT.parent))
+    import bench_env
+    import gymnasium as gym
+    import numpy as np
+
+    env = bench_env._StepClock(gym.make("NeuroCog/Walk-v0", max_episode_steps=3))
+    env.reset(seed=0)  # the first reset is not a vector step
+    for _ in range(3):
+        env.step(np.zeros(15, np.float32))
+    env.reset()
+    env.step(np.zeros(15, np.float32))
+    calls, resets = env.timeline()
+    assert resets == 1 and len(calls) == 5 and len(env.samples()) == 4
+    assert all(t > 0 for t in calls)
+    env.close()
