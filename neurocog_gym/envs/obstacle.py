@@ -168,9 +168,11 @@ class ObstacleEnv(QuadrupedEnv):
         self._yaw_now = self._yaw() if yaw is None else yaw
         self._touch_now = self.touch() if touch is None else touch
         # Fancy indexing already copies feet and hips; the kernel only reads v_body.
+        r = self.robot
         self.eff = self.effectivity.step(
-            d.time, self._touch_now, self._feet(), d.xpos[self.robot.hip_body],
+            d.time, self._touch_now, self._feet(), d.xpos[r.hip_body],
             self._yaw_now, d.qvel[0:3], self.perceived_boxes(),
+            d.xpos[r.thigh_body], d.xpos[r.shank_body],
         )  # fmt: skip
 
     # -- episode --------------------------------------------------------------------------------

@@ -172,8 +172,8 @@ def motor_neuron_step(
 
 @njit(cache=True)
 def drive_kernel(
-    y, joint_neurons, g_flex, g_ext, provision, sag_gain, dir_gain, dir_steer, cor_gain,
-    cor_front_bias, side, front, hip_joints, abduct_joints, drive, hip_drive,
+    y, joint_neurons, g_flex, g_ext, provision, sag_gain, brake_from, dir_gain, dir_steer,
+    cor_gain, cor_front_bias, side, front, hip_joints, abduct_joints, drive, hip_drive,
 ):  # fmt: skip
     """Joint drives from the CPG outputs, shaped by the walking provision (``generator.py``).
 
@@ -181,15 +181,22 @@ def drive_kernel(
     provision (s_SAG, and s_DIR left/right), and each abduction gets a side step (s_COR) and a
     steering share (s_DIR) in proportion to its hip's protraction drive. Writes ``drive`` (12,)
     and ``hip_drive`` (4,), the hips' flexor-minus-extensor outputs (swing when > 0).
+
+    The stride scale is ``1 + sag_gain s_SAG`` down to ``s_SAG = brake_from``; below it falls
+    linearly to -1 at ``s_SAG = -1`` (the brake: 0 marches in place, -1 is the trot reversed).
     """
     for j in range(drive.shape[0]):
         drive[j] = g_flex[j] * y[joint_neurons[j, 0]] - g_ext[j] * y[joint_neurons[j, 1]]
     s_sag, s_cor, s_dir = provision[0], provision[1], provision[2]
+    if s_sag >= brake_from:
+        stride = 1.0 + sag_gain * s_sag
+    else:
+        stride = -1.0 + (2.0 + sag_gain * brake_from) * (s_sag + 1.0) / (brake_from + 1.0)
     for k in range(hip_joints.shape[0]):
         h = hip_joints[k]
         a = abduct_joints[k]
         protraction = drive[h]
-        drive[h] = protraction * ((1.0 + sag_gain * s_sag) * (1.0 - dir_gain * s_dir * side[k]))
+        drive[h] = protraction * (stride * (1.0 - dir_gain * s_dir * side[k]))
         lateral = (
             cor_gain * s_cor * (1.0 + cor_front_bias * front[k]) + dir_steer * s_dir * front[k]
         )

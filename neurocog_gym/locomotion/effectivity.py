@@ -23,11 +23,15 @@ Per control cycle, for each leg:
 * **Walking provision** when no swing conflicts but an obstacle lies in the corridor ahead within
   ``lookahead``: side-step away from it (s_COR towards the side with more room), and slow down
   while it is close (Fig. 20b: "moved left to avoid an obstacle further ahead").
+* **The fit for a block that appears within reach** (``avoidance.py``): the legs cannot clear a
+  6-8 cm block that appears 4-13 cm ahead of a swinging leg's hip, so instead of an interrupt
+  the provision brakes the trot to a stop (reversed), side-steps and walks past. While it is
+  engaged it overrides the rules above: mode provision, its provision, no interrupt.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -40,6 +44,7 @@ from neurocog_gym.locomotion._effectivity_kernel import (  # noqa: F401  (public
     PHASE_OVER,
     PHASE_UP,
 )
+from neurocog_gym.locomotion.avoidance import AvoidanceParams, SuddenAvoidance
 from neurocog_gym.robot.names import FRONT_LEGS
 
 
@@ -85,6 +90,9 @@ class EffectivityParams:
     """A remembered box is forgotten once every foot is this far past its far face, m."""
     forget_distance: float = 1.5
     """... or once it is farther than this from the torso, m."""
+    avoidance: AvoidanceParams = field(default_factory=AvoidanceParams)
+    """The stop / side-step / pass teacher for blocks that appear within reach
+    (``avoidance.py``); ``AvoidanceParams(enabled=False)`` leaves the rules above alone."""
 
 
 @dataclass
@@ -160,6 +168,7 @@ class Effectivity:
         self.plan_start = np.zeros(4)
         self._memory = np.zeros((self.memory_capacity, 2, 3))
         self._n_memory = 0
+        self.avoidance = SuddenAvoidance(p.avoidance)
 
     @property
     def memory(self) -> np.ndarray:
@@ -174,6 +183,7 @@ class Effectivity:
         self.plan_box[:] = 0.0
         self.plan_start[:] = 0.0
         self._n_memory = 0
+        self.avoidance.reset()
 
     def remember(
         self, boxes: np.ndarray, foot: np.ndarray, torso: np.ndarray, heading: np.ndarray
@@ -202,6 +212,8 @@ class Effectivity:
         yaw: float,
         v_body: np.ndarray,
         boxes: np.ndarray,
+        thighs: np.ndarray | None = None,
+        knees: np.ndarray | None = None,
     ) -> EffectivityState:
         """Predict footholds and swing paths and check them against ``boxes``.
 
@@ -214,6 +226,9 @@ class Effectivity:
             v_body: (3,) torso linear velocity, m/s (world).
             boxes: (K, 2, 3) perceived obstacle boxes (min/max corners), m; merged into the
                 obstacle memory (:meth:`remember`), against which everything is checked.
+            thighs: (4, 3) hip flexion joints (thigh origins), m; with ``knees``, the legs'
+                shape for the avoidance (``avoidance.py``). None: no avoidance this cycle.
+            knees: (4, 3) knees (shank origins), m.
         """
         swinging = np.empty(4, dtype=bool)
         foothold = np.empty((4, 3))
@@ -229,6 +244,14 @@ class Effectivity:
             self.plan_start, self._memory, self._n_memory,
             swinging, foothold, foothold_safe, path_safe, direction, provision,
         )  # fmt: skip
+        if thighs is not None and knees is not None:
+            avoid = self.avoidance.update(t, yaw, foot, thighs, knees, self.memory)
+            if avoid is not None:
+                # The provision's teacher overrides the rules; no interrupt is in progress.
+                mode = MODE_PROVISION
+                provision[:] = avoid
+                direction[:] = avoid  # every leg's slot carries the body motion, as the rules do
+                self.phase[:] = PHASE_NONE
         return EffectivityState(
             swinging=swinging,
             foothold=foothold,

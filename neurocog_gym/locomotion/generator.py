@@ -7,7 +7,11 @@ and the proprioception; the output is the 12 servo position targets.
 How the walking provision enters the CPG (§5.2 says only that the three values go to the CPG; this
 is our reading, each value in [-1, 1], 0 = the gait as tuned):
 
-* s_SAG scales the hip-flexion drive (stride length) by ``1 + sag_gain * s_SAG``.
+* s_SAG scales the hip-flexion drive (stride length) by ``1 + sag_gain * s_SAG``, down to
+  ``s_SAG = brake_from``; below that the brake: the scale falls linearly to -1 at s_SAG = -1, so
+  the trot marches in place at scale 0 and walks backwards at -1 (the hips' CPG drive
+  reversed). A brake command is followed within ``brake_tau``, not the slow ``provision_tau``:
+  stopping for an obstacle that appears in front of the robot is a short-term adaptation.
 * s_DIR turns: left hips scale by ``1 - dir_gain * s_DIR``, right hips by ``1 + dir_gain * s_DIR``
   (positive turns left, counter-clockwise seen from above), and the abduction joints steer: each
   adds ``dir_steer * s_DIR`` times the hip's (unscaled) protraction drive, with the sign of the
@@ -21,7 +25,8 @@ is our reading, each value in [-1, 1], 0 = the gait as tuned):
   stance. Front legs get ``1 + cor_front_bias`` of it and hind legs ``1 - cor_front_bias``: with
   equal shares the hind legs' side push dominated and a side step also turned the body (about
   25 deg/s away from the step at s_COR = 0.5, measured while designing the default gait).
-The provision is low-pass filtered (``provision_tau``): the CPG is a medium-term process (§5).
+The provision is low-pass filtered (``provision_tau``): the CPG is a medium-term process (§5);
+s_SAG uses ``brake_tau`` instead while it or its command is below ``brake_from``.
 
 Soft start (our addition, ``start_ramp``): after :meth:`LocomotionGenerator.reset` the whole CPG
 drive fades in linearly over ``start_ramp`` seconds. The CPG starts in full trot, and without the
@@ -63,6 +68,10 @@ class ProvisionParams:
 
     sag_gain: float = 0.6
     """Fractional stride change per unit s_SAG."""
+    brake_from: float = -0.5
+    """s_SAG below which the brake acts (stride scale linear to -1 at s_SAG = -1)."""
+    brake_tau: float = 0.02
+    """Low-pass time constant of s_SAG while braking, s."""
     dir_gain: float = 0.3
     """Fractional left/right stride difference per unit s_DIR."""
     dir_steer: float = 0.2
@@ -145,9 +154,9 @@ class LocomotionGenerator:
         """
         p = self.prov
         drive_kernel(
-            y, _JOINT_NEURONS, self.g_flex, self.g_ext, self.provision, p.sag_gain, p.dir_gain,
-            p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS, ABDUCT_JOINTS,
-            self.drive, self.hip_drive,
+            y, _JOINT_NEURONS, self.g_flex, self.g_ext, self.provision, p.sag_gain, p.brake_from,
+            p.dir_gain, p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS,
+            ABDUCT_JOINTS, self.drive, self.hip_drive,
         )  # fmt: skip
 
     def step(self, provision, interrupt, theta, theta_dot, touch) -> np.ndarray:
@@ -163,8 +172,14 @@ class LocomotionGenerator:
         Returns:
             (12,) servo position targets, rad.
         """
-        a = self.dt / max(self.prov.provision_tau, self.dt)
-        self.provision += a * (np.asarray(provision, dtype=np.float64) - self.provision)
+        p = self.prov
+        command = np.asarray(provision, dtype=np.float64)
+        braking = command[0] < p.brake_from or self.provision[0] < p.brake_from
+        before = self.provision[0]
+        a = self.dt / max(p.provision_tau, self.dt)
+        self.provision += a * (command - self.provision)
+        if braking:
+            self.provision[0] = before + self.dt / max(p.brake_tau, self.dt) * (command[0] - before)
         y = self.cpg.step(touch)
         self._drive(y)
         self.elapsed += self.dt

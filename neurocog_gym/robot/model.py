@@ -55,6 +55,10 @@ class RobotIndex:
     """(4,) geom id of each foot."""
     hip_body: np.ndarray
     """(4,) body id of each leg's first body (its hip)."""
+    thigh_body: np.ndarray
+    """(4,) body id of each thigh (origin: the hip flexion joint)."""
+    shank_body: np.ndarray
+    """(4,) body id of each shank (origin: the knee)."""
     tof_site: np.ndarray
     """(4,) site id of each time-of-flight sensor."""
     robot_geoms: np.ndarray
@@ -94,6 +98,8 @@ class RobotIndex:
             foot_site=np.array([one("site", n) for n in names.FOOT_SITES]),
             foot_geom=np.array([one("geom", n) for n in names.FOOT_GEOMS]),
             hip_body=np.array([one("body", n) for n in names.HIP_BODIES]),
+            thigh_body=np.array([one("body", n) for n in names.THIGH_BODIES]),
+            shank_body=np.array([one("body", n) for n in names.SHANK_BODIES]),
             tof_site=np.array([one("site", n) for n in names.TOF_SITES]),
             robot_geoms=robot_geoms,
             joint_lo=model.jnt_range[joints, 0].copy(),

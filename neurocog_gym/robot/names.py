@@ -21,6 +21,10 @@ TOUCH_SENSORS: tuple[str, ...] = tuple(f"{leg}_touch" for leg in LEGS)
 FOOT_SITES: tuple[str, ...] = tuple(f"{leg}_foot" for leg in LEGS)
 FOOT_GEOMS: tuple[str, ...] = tuple(f"{leg}_foot" for leg in LEGS)
 HIP_BODIES: tuple[str, ...] = tuple(f"{leg}_hip" for leg in LEGS)
+THIGH_BODIES: tuple[str, ...] = tuple(f"{leg}_thigh" for leg in LEGS)
+"""Each thigh body's origin is its hip flexion joint."""
+SHANK_BODIES: tuple[str, ...] = tuple(f"{leg}_shank" for leg in LEGS)
+"""Each shank body's origin is its knee joint."""
 TORSO: str = "torso"
 TOF_SITES: tuple[str, ...] = ("tof_0", "tof_1", "tof_2", "tof_3")
 """Time-of-flight sensor sites, left to right. Site frame: +x optical axis, +y left, +z up."""

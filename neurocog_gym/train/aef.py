@@ -6,10 +6,15 @@ Dataset rows (31 inputs, see ``locomotion.aef.INPUT_NAMES``):
   velocities v(t); the joint angles are theta(t-1); touch is noise (see ``babbling.py``); A_h, A_w,
   A_s are drawn at random (on the stand there is no object; the head must not depend on them).
   Target: the interrupt head's 12 outputs = the babbled command Theta(t-1).
-* **Provision rows** (geometric teacher): the effectivity's walk-around rule
-  (``Effectivity._provision``) fills every leg's direction with the desired body motion
-  (s_SAG, s_COR, 0) it chose; the provision head learns to output (s_SAG, s_COR, s_DIR) =
-  (d_x, d_y, 0) from those inputs. Joint angles and touch come from babbling rows, A at random.
+* **Provision rows** (geometric teacher): the effectivity's two provision rules — the
+  walk-around of an obstacle ahead (``_effectivity_kernel._provision``: s_SAG -0.3 or 0, s_COR,
+  s_DIR 0) and the stop / side-step / pass of a block that appears within reach
+  (``locomotion/avoidance.py``: s_SAG down to -1, the brake; s_COR ±1; s_DIR holding the
+  heading) — fill every leg's direction slot with the body motion (s_SAG, s_COR, s_DIR) they
+  chose; the provision head learns to output (s_SAG, s_COR, s_DIR) = (d_x, d_y, d_z) from those
+  inputs. Rows draw s_SAG from [-1, 0.2] (a quarter of them exactly -1, the back-off), s_COR
+  from [-1, 1] (a fifth 0, a fifth ±1) and s_DIR from [-1, 1] (half of them 0). Joint angles
+  and touch come from babbling rows, A at random.
 
 Loss: mean squared error of each head on its own rows. Validation: a held-out 20 % split;
 ``baseline_val_loss`` is the loss of predicting the training mean. Early stopping on the
@@ -59,10 +64,14 @@ def build_dataset(babble: dict[str, np.ndarray], rng: np.random.Generator, provi
     y_int[:n_int] = babble["command"]
     # Provision rows: the teacher's desired body motion in every leg's direction slot.
     prov = np.column_stack(
-        [rng.uniform(-0.5, 0.2, n_prov), rng.uniform(-1, 1, n_prov), np.zeros(n_prov)]
+        [rng.uniform(-1, 0.2, n_prov), rng.uniform(-1, 1, n_prov), rng.uniform(-1, 1, n_prov)]
     )
-    prov[rng.random(n_prov) < 0.2, 1] = 0.0
-    X[n_int:, 3:15] = np.tile(np.column_stack([prov[:, :2], np.zeros(n_prov)]), 4)
+    prov[rng.random(n_prov) < 0.25, 0] = -1.0
+    u = rng.random(n_prov)
+    prov[u < 0.2, 1] = 0.0
+    prov[(u >= 0.2) & (u < 0.4), 1] = np.sign(prov[(u >= 0.2) & (u < 0.4), 1])
+    prov[rng.random(n_prov) < 0.5, 2] = 0.0
+    X[n_int:, 3:15] = np.tile(prov, 4)
     X[n_int:, 15:27] = babble["theta_prev"][rng.integers(0, n_int, n_prov)]
     y_prov = np.zeros((n, 3))
     y_prov[n_int:] = prov

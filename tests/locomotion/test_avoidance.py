@@ -1,0 +1,139 @@
+"""The stop / side-step / pass teacher of the effectivity (locomotion/avoidance.py)."""
+
+import numpy as np
+import pytest
+
+from neurocog_gym.locomotion.avoidance import (
+    PASS,
+    REVERSE,
+    SIDE,
+    WALK,
+    AvoidanceParams,
+    SuddenAvoidance,
+    _reach,
+)
+from neurocog_gym.locomotion.effectivity import (
+    MODE_INTERRUPT,
+    MODE_PROVISION,
+    Effectivity,
+    EffectivityParams,
+)
+
+# A standing robot heading +x: thighs (hip joints) 0.22 m up, knees 0.02 m ahead at 0.11 m.
+THIGH = np.array(
+    [[0.15, 0.12, 0.22], [0.15, -0.12, 0.22], [-0.15, 0.12, 0.22], [-0.15, -0.12, 0.22]]
+)
+KNEE = THIGH + [0.02, 0.0, -0.11]
+FOOT = THIGH + [0.0, 0.0, -0.20]
+FOOT[:, 2] = 0.018
+
+
+def box(x0, x1, y0, y1, h=0.07):
+    return np.array([[[x0, y0, 0.0], [x1, y1, h]]])
+
+
+def legs(dx=0.0, dy=0.0):
+    d = np.array([dx, dy, 0.0])
+    return FOOT + d, THIGH + d, KNEE + d
+
+
+def test_reach_is_the_knee_below_a_block_top_above_the_knee_and_the_sole_below_it():
+    # Top 0.07 m: the thigh (lowest point 0.11 - 0.017) is above it; the shank's capsule reaches
+    # its most forward point at the knee end that is still below the top: the sample at s = 0.2
+    # of knee -> foot is at z = 0.11 - 0.2 * 0.092 = 0.0916 (too high), s = 0.4: 0.0732 - 0.012
+    # = 0.0612 <= 0.07, x = 0.15 + 0.02 * 0.6 + 0.012 = 0.174.
+    assert _reach(FOOT, THIGH, KNEE, 0.07)[0] == pytest.approx(0.174)
+    # A low block: only the sole counts, 0.15 + 0.018.
+    assert _reach(FOOT, THIGH, KNEE, 0.02)[0] == pytest.approx(0.168)
+
+
+def test_a_block_appearing_in_a_front_lane_reverses_the_trot():
+    av = SuddenAvoidance()
+    f, t, k = legs()
+    out = av.update(0.0, 0.0, f, t, k, box(0.25, 0.33, 0.05, 0.25))
+    assert av.state == REVERSE
+    assert out.tolist() == [-1.0, 0.0, 0.0]
+    # The lanes: left legs between y 0.12 and 0.12 -> +- 0.048; the block (0.05..0.25) overlaps
+    # the left lanes; shifting right needs 0.12 + 0.048 - 0.05 = 0.118 < shifting left 0.25 +
+    # 0.048 + 0.12 = 0.418: the side step goes right.
+    assert av.direction == -1.0
+
+
+def test_blocks_beside_the_lanes_far_ahead_or_low_do_not_engage():
+    f, t, k = legs()
+    for b in (
+        box(0.25, 0.33, 0.30, 0.50),  # left of every lane
+        box(0.80, 0.90, -0.1, 0.1),  # first seen 0.65 m ahead of the leading foot: not sudden
+        box(0.25, 0.33, -0.1, 0.1, h=0.015),  # lower than min_height
+    ):
+        av = SuddenAvoidance()
+        assert av.update(0.0, 0.0, f, t, k, b) is None
+        assert av.state == WALK
+
+
+def test_a_far_block_stays_with_the_walk_around_even_when_the_robot_comes_close():
+    av = SuddenAvoidance()
+    b = box(0.80, 0.90, -0.1, 0.1)
+    f, t, k = legs()
+    av.update(0.0, 0.0, f, t, k, b)  # seen first from afar
+    f, t, k = legs(dx=0.55)
+    assert av.update(1.0, 0.0, f, t, k, b) is None
+
+
+def test_back_off_then_side_step_then_pass_then_walk():
+    p = AvoidanceParams()
+    av = SuddenAvoidance(p)
+    b = box(0.25, 0.33, 0.05, 0.25)
+    f, t, k = legs()
+    av.update(0.0, 0.0, f, t, k, b)
+    assert av.state == REVERSE
+    # Backed off: every in-lane leg's reach 0.174 - dx is >= backoff behind 0.25 once dx >= 0.006,
+    # but not before t_rev.
+    f, t, k = legs(dx=-0.01)
+    av.update(0.1, 0.0, f, t, k, b)
+    assert av.state == REVERSE
+    out = av.update(p.t_rev, 0.0, f, t, k, b)
+    assert av.state == SIDE
+    # Side step to the right (direction -1), the hips cancelled by k = 1 + 10 (0.07 - gap) with
+    # gap = 0.25 - 0.164 = 0.086 -> k clipped to k_min = 1: stride 0 (march in place).
+    assert out[1] == -1.0
+    assert out[0] == pytest.approx(-0.5 - 0.7 / 3.4)
+    # A heading error of 0.1 rad: s_DIR = -2 * 0.1.
+    out = av.update(p.t_rev + 0.01, 0.1, f, t, k, b)
+    assert out[2] == pytest.approx(-0.2)
+    # Shifted right by 0.2 m: the left lanes end at 0.12 - 0.2 + 0.058 < 0.05: clear -> pass.
+    f, t, k = legs(dx=-0.01, dy=-0.2)
+    out = av.update(p.t_rev + 0.02, 0.0, f, t, k, b)
+    assert av.state == PASS
+    assert out[0] == 0.0
+    # Every foot past the block's far face (+ 3 cm): walk, not engaged.
+    f, t, k = legs(dx=0.55, dy=-0.2)
+    assert av.update(p.t_rev + 2.0, 0.0, f, t, k, b) is None
+    assert av.state == WALK
+
+
+def test_disabled_never_engages():
+    av = SuddenAvoidance(AvoidanceParams(enabled=False))
+    f, t, k = legs()
+    assert av.update(0.0, 0.0, f, t, k, box(0.25, 0.33, 0.05, 0.25)) is None
+
+
+def test_effectivity_hands_the_teacher_to_the_provision_group():
+    eff = Effectivity(EffectivityParams())
+    f, t, k = legs()
+    hip = THIGH.copy()
+    v = np.array([0.5, 0.0, 0.0])
+    touch = np.array([0.0, 1.0, 1.0, 0.0])  # FL swings
+    b = box(0.25, 0.33, 0.05, 0.25)
+    eff.step(0.0, np.ones(4), f, hip, 0.0, v, np.zeros((0, 2, 3)), t, k)
+    s = eff.step(0.05, touch, f, hip, 0.0, v, b, t, k)
+    assert s.mode == MODE_PROVISION
+    assert s.provision.tolist() == [-1.0, 0.0, 0.0]
+    assert s.direction.tolist() == [[-1.0, 0.0, 0.0]] * 4
+    assert (s.phase == 0).all()  # no interrupt in progress while the teacher acts
+    # Without the legs' shape, the rules alone: the swinging FL meets the block -> interrupt.
+    eff2 = Effectivity(EffectivityParams())
+    eff2.step(0.0, np.ones(4), f, hip, 0.0, v, np.zeros((0, 2, 3)))
+    s2 = eff2.step(0.05, touch, f, hip, 0.0, v, b)
+    assert s2.mode == MODE_INTERRUPT
+    assert s2.phase[0] != 0
