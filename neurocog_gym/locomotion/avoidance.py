@@ -41,20 +41,18 @@ tasks walk along it): x ahead, y left. Boxes are the effectivity's remembered wo
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-FOOT_RADIUS = 0.018
-"""Sole sphere radius, m (assets/quadruped.xml)."""
-THIGH_RADIUS = 0.017
-"""Thigh capsule radius, m (assets/quadruped.xml)."""
-SHANK_RADIUS = 0.012
-"""Shank capsule radius, m (assets/quadruped.xml)."""
+from neurocog_gym.locomotion import _avoidance_kernel as _k
+
+FOOT_RADIUS = _k.FOOT_RADIUS
+"""Sole sphere radius, m (assets/quadruped.xml; the thigh and shank capsules: 0.017, 0.012)."""
 
 WALK, REVERSE, SIDE, PASS = 0, 1, 2, 3
 STATE_NAMES = ("walk", "reverse", "side", "pass")
-_S = np.linspace(0.0, 1.0, 6)
 
 
 @dataclass(frozen=True)
@@ -126,33 +124,23 @@ class SuddenAvoidance:
         self.t_state = 0.0
         self.direction = 0.0
         self.yaw0: float | None = None
+        self._c = 1.0
+        self._s = 0.0
         self.engaged_far = 0.0
-        self._known: list[list] = []  # [centre (2,), sudden?]
+        self._known = np.zeros((self.known_capacity, 2))
+        self._known_sudden = np.zeros(self.known_capacity, dtype=np.bool_)
+        self._n_known = 0
+        self._inlane = np.zeros(4, dtype=np.bool_)
+        self._gap = np.zeros(4)
+        self._out = np.zeros(_k.N_OUT)
+
+    known_capacity = 64
+    """Most boxes whose first sighting is remembered (later ones never engage)."""
 
     @property
     def state_name(self) -> str:
         """The current state: "walk", "reverse", "side" or "pass"."""
         return STATE_NAMES[self.state]
-
-    def _sudden(self, boxes: np.ndarray, lead: float) -> list[np.ndarray]:
-        """Boxes (task frame) high enough that were first seen near the leading foot."""
-        keep = []
-        for box in boxes:
-            if not box[1, 2] > self.p.min_height:
-                continue
-            c = box[:, :2].mean(axis=0)
-            match = None
-            for entry in self._known:
-                if np.hypot(*(c - entry[0])) < self.p.same_box:
-                    entry[0] = c
-                    match = entry
-                    break
-            if match is None:
-                match = [c, bool(box[0, 0] - lead < self.p.sudden_range)]
-                self._known.append(match)
-            if match[1]:
-                keep.append(box)
-        return keep
 
     def update(
         self,
@@ -179,75 +167,60 @@ class SuddenAvoidance:
         p = self.p
         if self.yaw0 is None:
             self.yaw0 = float(yaw)
+            self._c, self._s = math.cos(self.yaw0), math.sin(self.yaw0)
         if not p.enabled or (self.state == WALK and len(boxes) == 0):
             return None
-        c, s = np.cos(self.yaw0), np.sin(self.yaw0)
-        rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-        feet = feet @ rot.T
-        thighs = thighs @ rot.T
-        knees = knees @ rot.T
-        boxes = _boxes_in_frame(np.asarray(boxes, dtype=np.float64), rot)
-        ey = float(np.angle(np.exp(1j * (yaw - self.yaw0))))
-        lead = float(feet[:, 0].max())
-        lanes = np.stack(
-            [np.minimum(thighs[:, 1], feet[:, 1]), np.maximum(thighs[:, 1], feet[:, 1])], 1
-        )
-        r = FOOT_RADIUS + p.margin
-        hyst = p.lane_hysteresis if self.state in (SIDE, PASS) else 0.0
-        rel = [b for b in self._sudden(boxes, lead) if feet[:, 0].min() < b[1, 0] + 0.03]
-        inlane = np.zeros(4, dtype=bool)
-        gap = np.full(4, np.inf)
-        close = False
-        need_left = need_right = deficit = 0.0
-        for b in rel:
-            lo, hi = b[0, 1], b[1, 1]
-            ahead = b[0, 0] - lead < p.trigger
-            front = _reach(feet, thighs, knees, float(b[1, 2]))
-            for leg in range(4):
-                if feet[leg, 0] > b[1, 0] + 0.03:
-                    continue  # this foot is past the box
-                if lanes[leg, 1] + r + hyst > lo and lanes[leg, 0] - r - hyst < hi:
-                    inlane[leg] = True
-                    close = close or ahead
-            gap = np.minimum(gap, b[0, 0] - front)
-            need_right = max(need_right, lanes[:, 1].max() + r - lo)
-            need_left = max(need_left, hi + r - lanes[:, 0].min())
-            if self.direction > 0:
-                deficit = max(deficit, hi + r - lanes[:, 0].min())
-            elif self.direction < 0:
-                deficit = max(deficit, lanes[:, 1].max() + r - lo)
-        if self.state == WALK and close:
-            self.engaged_far = max(float(b[1, 0]) for b in rel)
-            self.direction = 1.0 if need_left < need_right else -1.0
+        inlane, gap, out = self._inlane, self._gap, self._out
+        self._n_known = _k.avoidance_geometry(
+            feet, thighs, knees, boxes, self._c, self._s, self._known, self._known_sudden,
+            self._n_known, p.sudden_range, p.min_height, p.same_box, p.trigger,
+            FOOT_RADIUS + p.margin, p.lane_hysteresis if self.state in (SIDE, PASS) else 0.0,
+            inlane, gap, out,
+        )  # fmt: skip
+        close = out[_k.O_CLOSE] > 0.0
+        any_in = out[_k.O_N_IN] > 0.0
+        gap_in = float(out[_k.O_GAP_IN])
+        if self.state == WALK:
+            if not close:
+                return None
+            self.engaged_far = float(out[_k.O_FAR])
+            self.direction = 1.0 if out[_k.O_NEED_LEFT] < out[_k.O_NEED_RIGHT] else -1.0
             self._set(REVERSE, t)
         elif self.state == REVERSE:
-            if bool(np.all(gap[inlane] >= p.backoff)) and t - self.t_state >= p.t_rev:
+            if gap_in >= p.backoff and t - self.t_state >= p.t_rev:
                 self._set(SIDE, t)
         elif self.state == SIDE:
-            if not inlane.any():
+            if not any_in:
                 self._set(PASS, t)
         elif self.state == PASS:
-            if inlane.any() and close:
+            if any_in and close:
                 self._set(SIDE, t)
-            elif feet[:, 0].min() > self.engaged_far + 0.03:
+            elif self._rear(feet) > self.engaged_far + 0.03:
                 self._set(WALK, t)
         if self.state == WALK:
             return None
-        out = np.zeros(3)
+        ey = math.remainder(float(yaw) - self.yaw0, 2.0 * math.pi)
         if self.state == REVERSE:
-            out[0] = -1.0
+            sag, cor, turn = -1.0, 0.0, 0.0
         elif self.state == SIDE:
             k = p.k_side
-            if inlane.any():
-                k += p.kx * (p.side_backoff - gap[inlane].min())
-                k = float(np.clip(k, p.k_min, p.k_max))
-            out[0] = sag_for_stride(1.0 - k, p.sag_gain, p.brake_from)
-            out[1] = self.direction * p.side_cor
-            out[2] = -p.side_dir * ey
+            if any_in:
+                k = min(max(k + p.kx * (p.side_backoff - gap_in), p.k_min), p.k_max)
+            sag = sag_for_stride(1.0 - k, p.sag_gain, p.brake_from)
+            cor = self.direction * p.side_cor
+            turn = -p.side_dir * ey
         else:
-            out[1] = self.direction * p.cor_gain * max(deficit + 0.01, 0.0)
-            out[2] = -p.dir_gain * ey
-        return np.clip(out, -1.0, 1.0)
+            need = out[_k.O_NEED_LEFT] if self.direction > 0 else out[_k.O_NEED_RIGHT]
+            deficit = float(need) if out[_k.O_N_REL] > 0 else 0.0
+            sag = 0.0
+            cor = self.direction * p.cor_gain * max(deficit + 0.01, 0.0)
+            turn = -p.dir_gain * ey
+        return np.array([sag, min(max(cor, -1.0), 1.0), min(max(turn, -1.0), 1.0)])
+
+    def _rear(self, feet: np.ndarray) -> float:
+        """The rearmost foot's position along the frame's heading, m."""
+        c, s = self._c, self._s
+        return min(float(feet[i, 0]) * c + float(feet[i, 1]) * s for i in range(4))
 
     def _set(self, state: int, t: float) -> None:
         if state != self.state:
@@ -255,30 +228,14 @@ class SuddenAvoidance:
             self.t_state = t
 
 
-def _boxes_in_frame(boxes: np.ndarray, rot: np.ndarray) -> np.ndarray:
-    """(K, 2, 3) world boxes -> the bounding boxes of their corners in the frame of ``rot``."""
-    if boxes.size == 0:
-        return boxes.reshape(0, 2, 3)
-    lo, hi = boxes[:, 0], boxes[:, 1]
-    corners = np.stack(
-        [np.stack([xs[:, 0], ys[:, 1], lo[:, 2]], 1) for xs in (lo, hi) for ys in (lo, hi)],
-        1,
-    )  # (K, 4, 3): the four ground-plane corners
-    rc = corners @ rot.T
-    out = np.empty_like(boxes)
-    out[:, 0, :2] = rc[:, :, :2].min(axis=1)
-    out[:, 1, :2] = rc[:, :, :2].max(axis=1)
-    out[:, 0, 2] = lo[:, 2]
-    out[:, 1, 2] = hi[:, 2]
-    return out
-
-
 def _reach(feet: np.ndarray, thighs: np.ndarray, knees: np.ndarray, top: float) -> np.ndarray:
-    """(4,) most forward x of each leg (thigh, shank and sole capsules) below ``top``."""
-    out = feet[:, 0] + FOOT_RADIUS
-    for a, b, rad in ((thighs, knees, THIGH_RADIUS), (knees, feet, SHANK_RADIUS)):
-        for s in _S:
-            pt = a + s * (b - a)
-            low = pt[:, 2] - rad <= top
-            out = np.where(low, np.maximum(out, pt[:, 0] + rad), out)
+    """(4,) most forward x of each leg (thigh, shank and sole capsules) below ``top`` (kernel)."""
+    out = np.empty(4)
+    _k.leg_reach(
+        np.asarray(feet, float),
+        np.asarray(thighs, float),
+        np.asarray(knees, float),
+        float(top),
+        out,
+    )
     return out
