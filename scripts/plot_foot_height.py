@@ -2,9 +2,12 @@
 
 Runs the same ``NeuroCog/SuddenObstacle-v0`` trial (same seed, so the same block appears at the
 same moment) once per policy and plots the height of each front foot's sole over time, with the
-obstacle's appearance and height marked and the AEF's interrupt cycles shaded.
+obstacle's appearance and height marked, the AEF's interrupt cycles and the effectivity's
+stop / side-step / pass states (``locomotion/avoidance.py``) shaded, and, on the right axis, the
+leading foot's distance to the block's near face (the stop shows there, not in the foot heights:
+the AEF does not step over a block that appears within reach).
 
-    python scripts/plot_foot_height.py --seed 3 --out docs/img/fig18_foot_height.png
+    python scripts/plot_foot_height.py --seed 0 --index 0 --out docs/img/fig18_foot_height.png
 """
 
 from __future__ import annotations
@@ -15,7 +18,8 @@ import numpy as np
 
 from neurocog_gym import io as nio
 from neurocog_gym.bench.runner import make_env, trial_seed
-from neurocog_gym.policies import make_policy
+from neurocog_gym.locomotion.avoidance import STATE_NAMES
+from neurocog_gym.policies import make_policy, start_episode
 from neurocog_gym.robot.names import LEGS
 
 
@@ -26,7 +30,8 @@ def record(policy_name: str, seed: int) -> dict:
     policy = make_policy(policy_name)
     obs, info = env.reset(seed=seed)
     radius = u.effectivity.p.foot_radius
-    t, z, phase = [], [], []
+    start_episode(policy, env)
+    t, z, phase, state, lead = [], [], [], [], []
     done = False
     while not done:
         obs, _, term, trunc, info = env.step(policy(obs))
@@ -34,11 +39,14 @@ def record(policy_name: str, seed: int) -> dict:
         t.append(float(u.data.time))
         z.append(u._feet()[:, 2] - radius)
         phase.append(u.eff.phase.copy() if u.eff.phase is not None else np.zeros(4, int))
+        state.append(u.effectivity.avoidance.state)
+        lead.append(float(u._feet()[:, 0].max()))
     outcome = info["outcome"] if info.get("passed") else "fail"
     blocks = [b.to_json() for b in u.pool.blocks]
     env.close()
     return {"t": np.array(t), "z": np.array(z), "phase": np.array(phase), "outcome": outcome,
-            "appeared": u.appeared_at, "leg": u.appear_leg, "blocks": blocks}  # fmt: skip
+            "appeared": u.appeared_at, "leg": u.appear_leg, "blocks": blocks,
+            "state": np.array(state), "lead": np.array(lead)}  # fmt: skip
 
 
 def main() -> None:
@@ -68,10 +76,26 @@ def main() -> None:
                 ax.fill_between(r["t"], 0, 1, where=on, alpha=0.15, step="mid",
                                 transform=ax.get_xaxis_transform(),
                                 label=f"{LEGS[leg]} interrupt phase")  # fmt: skip
+        colours = {1: "tab:red", 2: "tab:purple", 3: "tab:green"}
+        if name != "blind":  # the blind CPG ignores the effectivity's provision
+            for st, colour in colours.items():
+                on = r["state"] == st
+                if on.any():
+                    ax.fill_between(r["t"], 0, 1, where=on, alpha=0.12, step="mid",
+                                    color=colour, transform=ax.get_xaxis_transform(),
+                                    label=f"AEF provision: {STATE_NAMES[st]}")  # fmt: skip
         if r["appeared"] is not None:
             ax.axvline(r["appeared"], color="k", ls="--", lw=1, label="obstacle appears")
         for b in r["blocks"]:
             ax.axhline(100 * b["height"], color="tab:red", ls=":", lw=1)
+        if r["blocks"]:
+            near = min(b["x"] - 0.5 * b["length"] for b in r["blocks"])
+            ax2 = ax.twinx()
+            ax2.plot(r["t"], 100 * (near - r["lead"]), color="0.3", lw=1,
+                     label="lead foot behind the near face")  # fmt: skip
+            ax2.axhline(0.0, color="0.3", lw=0.5, ls=":")
+            ax2.set_ylabel("lead foot behind the near face, cm", fontsize=8)
+            ax2.legend(fontsize=7, loc="upper right")
         ax.set_ylabel("sole height, cm")
         ax.set_title(f"{name}: {r['outcome']} (block appeared in {LEGS[r['leg']]}'s swing; "
                      f"red: block height)", fontsize=9)  # fmt: skip

@@ -10,8 +10,9 @@ is our reading, each value in [-1, 1], 0 = the gait as tuned):
 * s_SAG scales the hip-flexion drive (stride length) by ``1 + sag_gain * s_SAG``, down to
   ``s_SAG = brake_from``; below that the brake: the scale falls linearly to -1 at s_SAG = -1, so
   the trot marches in place at scale 0 and walks backwards at -1 (the hips' CPG drive
-  reversed). A brake command is followed within ``brake_tau``, not the slow ``provision_tau``:
-  stopping for an obstacle that appears in front of the robot is a short-term adaptation.
+  reversed). A brake command is followed within ``brake_tau`` (by default at once), not the
+  slow ``provision_tau``: stopping for an obstacle that appears in front of the robot is a
+  short-term adaptation.
 * s_DIR turns: left hips scale by ``1 - dir_gain * s_DIR``, right hips by ``1 + dir_gain * s_DIR``
   (positive turns left, counter-clockwise seen from above), and the abduction joints steer: each
   adds ``dir_steer * s_DIR`` times the hip's (unscaled) protraction drive, with the sign of the
@@ -70,8 +71,9 @@ class ProvisionParams:
     """Fractional stride change per unit s_SAG."""
     brake_from: float = -0.5
     """s_SAG below which the brake acts (stride scale linear to -1 at s_SAG = -1)."""
-    brake_tau: float = 0.02
-    """Low-pass time constant of s_SAG while braking, s."""
+    brake_tau: float = 0.01
+    """Low-pass time constant of s_SAG while braking, s (one control cycle: at once; 0.02 s
+    left 28-38 of 100 dev trials touching the block against 14-18, ``docs/avoid_notes.md``)."""
     dir_gain: float = 0.3
     """Fractional left/right stride difference per unit s_DIR."""
     dir_steer: float = 0.2

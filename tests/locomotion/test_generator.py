@@ -56,10 +56,13 @@ def test_a_brake_command_is_followed_fast_and_a_slow_down_slowly():
     theta = np.asarray(gait.posture, dtype=np.float64)
     zeros = np.zeros(12)
     p = ProvisionParams()
-    # Brake: a = dt / brake_tau = 0.5 per cycle, so after 3 cycles s_SAG = -(1 - 0.5^3).
-    for _ in range(3):
-        gen.step(np.array([-1.0, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
-    assert gen.provision[0] == pytest.approx(-(1 - 0.5**3))
+    # Brake: a = dt / brake_tau = 1, the command is taken at once.
+    gen.step(np.array([-1.0, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
+    assert gen.provision[0] == -1.0
+    # Released: the brake's filter follows until s_SAG is back above brake_from (-1 -> 0.0 at
+    # once), then the medium-term one.
+    gen.step(np.array([0.0, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
+    assert gen.provision[0] == 0.0
     # A slow-down above brake_from keeps the medium-term filter: a = dt / provision_tau = 0.02.
     gen.reset(np.random.default_rng(0))
     gen.step(np.array([-0.3, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
