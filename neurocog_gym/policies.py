@@ -1,10 +1,12 @@
 """Policies over the obstacle envs' observations: each is a callable ``policy(obs) -> action``.
 
 * :class:`AEFPolicy` — the paper's controller: the Affordance–Effectivity Fit network (shipped
-  weights, NumPy forward pass) applied to the env's 31 AEF inputs. When the effectivity reports a
-  swing that must change (``aef_mode == 1``) the interrupt group drives the joints of the legs it
-  named; when an object lies ahead but not in a swing (``aef_mode == 2``) the provision group
-  changes the walk; otherwise the CPG walks alone (zero action).
+  weights, NumPy forward pass) applied to the env's 31 AEF inputs, nothing else of the env. When
+  the effectivity reports a swing that must change (``aef_mode == 1``) the interrupt group drives
+  the joints of the legs it named; when the walk must change (``aef_mode == 2``: an object ahead
+  to walk round, or a block that appeared within reach, which the legs cannot step over, to stop
+  for, side-step and pass — ``locomotion/avoidance.py``) the provision group changes the walk;
+  otherwise the CPG walks alone (zero action).
 * :class:`BlindPolicy` — never interrupts (the paper's "improved process disabled", Fig. 16b).
 * :class:`neurocog_gym.avoid.AvoidPolicy` — backs off from a block that appears in front of the
   robot, side-steps out of its path and walks past; reads the env's effectivity, so it has a

@@ -41,8 +41,8 @@ class SuddenObstacleEnv(ObstacleEnv):
     |---|---|---|
     | objects | (4, 8) | the 4 nearest perceived objects ahead: offset from the torso in its yaw frame (3), height, width, length, gamma, density |
     | objects_mask | (4,) | 1 for a valid row |
-    | aef_input | (31,) | the AEF's inputs (Fig. 7): A_h, A_w, A_s, 4 x 3 interrupt directions, 12 joint angles, 4 touch |
-    | aef_mode | () | 0 nothing to do, 1 a swing must change (interrupt group), 2 walk around (provision group) |
+    | aef_input | (31,) | the AEF's inputs (Fig. 7): A_h, A_w, A_s, 4 x 3 interrupt directions (in mode 2 each leg's slot holds the effectivity's provision s_SAG, s_COR, s_DIR), 12 joint angles, 4 touch |
+    | aef_mode | () | 0 nothing to do, 1 a swing must change (interrupt group), 2 change the walk (provision group): walk round an obstacle ahead, or stop, side-step and pass a block that appeared within reach |
     | foothold | (4, 3) | predicted footholds relative to the torso, yaw frame, m |
     | foothold_safe | (4,) | 1 if that foothold and swing path are clear of perceived obstacles |
     | graph_nodes, graph_edges, graph_counts | padded | the DD-GNG graph (``include_graph=True`` only) |

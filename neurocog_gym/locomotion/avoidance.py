@@ -18,7 +18,9 @@ on dev trials (run seed 2, sudden 0..99): reflex 94 / 4 / 2, this provision form
 (success / touch / fail; ``docs/avoid_notes.md``, 2026-12-01).
 
 States, for the remembered boxes that were first seen within ``sudden_range`` of the leading
-foot (boxes seen from afar stay with the effectivity's walk-around provision):
+foot, and for any box taller than ``step_over_height`` that a swing meets (``adopt``: the legs
+cannot carry out the interrupt; boxes seen from afar otherwise stay with the effectivity's
+walk-around provision):
 
 * ``walk``: not engaged; the effectivity's own rules act.
 * ``reverse``: a box overlaps a leg's lane (the band between its thigh and its foot, grown by
@@ -71,6 +73,10 @@ class AvoidanceParams:
     """Only boxes first remembered within this of the leading foot engage, m."""
     min_height: float = 0.02
     """Remembered boxes lower than this are ignored, m."""
+    step_over_height: float = 0.04
+    """Tallest box a swing can carry a foot over, m (the gait's swing clearance: 4.0 cm front,
+    ``docs/benchmarks_walk.md``). A taller box that a swing meets, lying ahead of the feet, is
+    handed to this teacher however far away it was first seen (``adopt``)."""
     same_box: float = 0.15
     """Box centres closer than this are the same box across memory updates, m."""
     t_rev: float = 0.25
@@ -136,6 +142,37 @@ class SuddenAvoidance:
 
     known_capacity = 64
     """Most boxes whose first sighting is remembered (later ones never engage)."""
+
+    def adopt(self, box: np.ndarray, feet: np.ndarray) -> bool:
+        """Take ``box`` (world (2, 3)) as one to stop for, if it is taller than a swing clears.
+
+        The effectivity calls this when a swing meets the box (it would fire an interrupt): the
+        fit of that affordance with the legs' effectivity. Only a box whose near face is ahead
+        of the leading foot is taken (a box under the body is the hind legs' swing business).
+
+        Returns:
+            Whether the box is now one to stop for.
+        """
+        p = self.p
+        if not p.enabled or self.state != WALK or not box[1, 2] > p.step_over_height:
+            return False
+        c, s = self._c, self._s
+        xs = [box[a, 0] * c + box[b, 1] * s for a in range(2) for b in range(2)]
+        ys = [-box[a, 0] * s + box[b, 1] * c for a in range(2) for b in range(2)]
+        lead = max(float(feet[i, 0]) * c + float(feet[i, 1]) * s for i in range(4))
+        if min(xs) < lead - 0.02:
+            return False
+        cx, cy = 0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys))
+        for j in range(self._n_known):
+            if math.hypot(cx - self._known[j, 0], cy - self._known[j, 1]) < p.same_box:
+                self._known_sudden[j] = True
+                return True
+        if self._n_known < self.known_capacity:
+            self._known[self._n_known] = (cx, cy)
+            self._known_sudden[self._n_known] = True
+            self._n_known += 1
+            return True
+        return False
 
     @property
     def state_name(self) -> str:

@@ -23,10 +23,11 @@ Per control cycle, for each leg:
 * **Walking provision** when no swing conflicts but an obstacle lies in the corridor ahead within
   ``lookahead``: side-step away from it (s_COR towards the side with more room), and slow down
   while it is close (Fig. 20b: "moved left to avoid an obstacle further ahead").
-* **The fit for a block that appears within reach** (``avoidance.py``): the legs cannot clear a
-  6-8 cm block that appears 4-13 cm ahead of a swinging leg's hip, so instead of an interrupt
-  the provision brakes the trot to a stop (reversed), side-steps and walks past. While it is
-  engaged it overrides the rules above: mode provision, its provision, no interrupt.
+* **The fit for a block within reach** (``avoidance.py``): the legs cannot clear a 6-8 cm block
+  that appears 4-13 cm ahead of a swinging leg's hip, nor any box taller than their swing
+  clearance that a swing meets, so instead of an interrupt the provision brakes the trot to a
+  stop (reversed), side-steps and walks past. While it is engaged it overrides the rules above:
+  mode provision, its provision, no interrupt.
 """
 
 from __future__ import annotations
@@ -245,6 +246,9 @@ class Effectivity:
             swinging, foothold, foothold_safe, path_safe, direction, provision,
         )  # fmt: skip
         if thighs is not None and knees is not None:
+            if mode == MODE_INTERRUPT and target >= 0:
+                # The fit: a box taller than a swing clears is stopped for, not stepped over.
+                self.avoidance.adopt(self._memory[target], foot)
             avoid = self.avoidance.update(t, yaw, foot, thighs, knees, self.memory)
             if avoid is not None:
                 # The provision's teacher overrides the rules; no interrupt is in progress.

@@ -137,3 +137,40 @@ def test_effectivity_hands_the_teacher_to_the_provision_group():
     s2 = eff2.step(0.05, touch, f, hip, 0.0, v, b)
     assert s2.mode == MODE_INTERRUPT
     assert s2.phase[0] != 0
+
+
+def test_a_tall_box_a_swing_meets_is_adopted_however_far_it_was_first_seen():
+    av = SuddenAvoidance()
+    b = box(0.80, 0.90, -0.1, 0.1)
+    f, t, k = legs()
+    assert av.update(0.0, 0.0, f, t, k, b) is None  # first seen 0.65 m ahead: not sudden
+    f, t, k = legs(dx=0.55)  # now 10 cm before the lead foot: the walk-around failed
+    assert av.update(1.0, 0.0, f, t, k, b) is None
+    assert av.adopt(b[0], f)
+    assert av.update(1.01, 0.0, f, t, k, b).tolist() == [-1.0, 0.0, 0.0]
+    assert av.state == REVERSE
+
+
+def test_low_boxes_and_boxes_behind_the_lead_foot_are_not_adopted():
+    f, t, k = legs()
+    av = SuddenAvoidance()
+    # 3 cm: below the 4 cm step_over_height, a swing clears it.
+    assert not av.adopt(box(0.25, 0.33, -0.1, 0.1, h=0.03)[0], f)
+    # Near face 5 cm behind the lead foot (0.15): under the body, the hind legs' business.
+    assert not av.adopt(box(0.10, 0.20, -0.1, 0.1)[0], f)
+    assert av.adopt(box(0.14, 0.20, -0.1, 0.1)[0], f)  # 1 cm behind: still taken
+
+
+def test_effectivity_adopts_the_box_an_interrupt_would_step_over():
+    eff = Effectivity(EffectivityParams())
+    f, t, k = legs()
+    hip = THIGH.copy()
+    v = np.array([0.5, 0.0, 0.0])
+    far = box(0.80, 0.90, 0.05, 0.25)
+    eff.step(0.0, np.ones(4), f, hip, 0.0, v, far, t, k)  # seen from afar: walk round it
+    assert eff.avoidance.state == WALK
+    f2, t2, k2 = legs(dx=0.55)
+    s = eff.step(0.05, np.array([0.0, 1.0, 1.0, 0.0]), f2, hip + [0.55, 0, 0], 0.0, v, far, t2, k2)
+    assert s.mode == MODE_PROVISION
+    assert s.provision[0] == -1.0
+    assert eff.avoidance.state == REVERSE
