@@ -1,14 +1,17 @@
-"""A picture strip of the avoid reflex on a sudden block (the README's strip).
+"""A picture strip of the AEF (or the avoid reflex) on a sudden block (the README's strip).
 
-One seeded ``NeuroCog/SuddenObstacle-v0`` episode under ``--policy avoid``, rendered with the
-attention graph, facets and footholds drawn in; four frames side by side: trotting just before
-the block appears, the back-off under way, the first frame of the side step's end (the reflex
-enters "pass"), and the robot walking past near the end of the episode.
+One seeded ``NeuroCog/SuddenObstacle-v0`` episode under ``--policy aef`` (the AEF network on the
+observation; its stop / side-step / pass comes from the effectivity's provision teacher,
+``locomotion/avoidance.py``) or ``--policy avoid`` (the interrupt-driven reflex), rendered with
+the attention graph, facets and footholds drawn in; four frames side by side: trotting just
+before the block appears, the back-off under way, the first frame of the side step's end
+("pass"), and the robot walking past near the end of the episode.
 
-    MUJOCO_GL=egl .venv/bin/python scripts/render_strip.py --seed 1
+    MUJOCO_GL=egl .venv/bin/python scripts/render_strip.py --policy aef --seed 1 \
+        --out docs/img/aef_sudden_strip.png
 
 The matching video:
-``neurocog record-video --policy avoid --seed 1 --out docs/img/avoid_sudden.mp4``.
+``neurocog record-video --policy aef --seed 1 --out docs/img/aef_sudden.mp4``.
 """
 
 from __future__ import annotations
@@ -23,18 +26,18 @@ import imageio.v3 as iio  # noqa: E402
 import numpy as np  # noqa: E402
 
 import neurocog_gym  # noqa: E402, F401  (registers the env ids)
-from neurocog_gym.avoid import AvoidPolicy  # noqa: E402
 from neurocog_gym.io import atomic_path  # noqa: E402
-from neurocog_gym.policies import start_episode  # noqa: E402
+from neurocog_gym.policies import make_policy, start_episode  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--policy", default="aef", choices=("aef", "avoid"), help="controller")
     ap.add_argument("--seed", type=int, default=1, help="episode seed")
     ap.add_argument("--width", type=int, default=400, help="width of one frame, pixels")
     ap.add_argument("--height", type=int, default=360, help="frame height, pixels")
     ap.add_argument("--camera", default="follow", help="scene camera: follow, side or overhead")
-    ap.add_argument("--out", default="docs/img/avoid_sudden_strip.png", help="PNG to write")
+    ap.add_argument("--out", default="docs/img/aef_sudden_strip.png", help="PNG to write")
     args = ap.parse_args(argv)
     env = gym.make(
         "NeuroCog/SuddenObstacle-v0",
@@ -44,16 +47,22 @@ def main(argv: list[str] | None = None) -> None:
         camera_name=args.camera,
     )
     obs, _ = env.reset(seed=args.seed)
-    policy = AvoidPolicy()
+    policy = make_policy(args.policy)
     start_episode(policy, env)
     u = env.unwrapped
+
+    def state() -> str:
+        if args.policy == "avoid":
+            return policy.state
+        return u.effectivity.avoidance.state_name
+
     frames, states, times, appeared = [], [], [], None
     done = False
     while not done:
         obs, _, terminated, truncated, _ = env.step(policy(obs))
         done = terminated or truncated
         frames.append(env.render())
-        states.append(policy.state)
+        states.append(state())
         times.append(float(u.data.time))
         if appeared is None and u.appeared_at is not None:
             appeared = len(frames) - 1

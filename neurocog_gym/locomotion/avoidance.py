@@ -1,4 +1,4 @@
-"""The effectivity's answer to a block that appears within reach: stop, side-step, walk past.
+"""The effectivity's answer to a block the legs cannot step over: stop, side-step, walk past.
 
 Why the AEF does not step over such a block here: the motor-neuron pools (Eq. 8 with the
 restoring term) hold a joint at most about 0.9 rad from the standing posture, so a foot rises
@@ -13,9 +13,10 @@ every leg's lane off the block, then the trot walks past with the heading held (
 This is the avoid reflex (``neurocog_gym/avoid.py``, which drives the hips through the interrupt
 group and reads the env from outside) recast as a geometric teacher inside the effectivity: its
 states and distances are the reflex's, its outputs are the three walking-provision values, and
-the AEF network's provision head turns them into the action (``policies.AEFPolicy``). Measured
-on dev trials (run seed 2, sudden 0..99): reflex 94 / 4 / 2, this provision form 83 / 15 / 2
-(success / touch / fail; ``docs/avoid_notes.md``, 2026-12-01).
+the AEF network's provision head turns them into the action (``policies.AEFPolicy``). Dev
+trials (run seed 2, sudden 0..99, success / touch / fail): the reflex 94 / 4 / 2, this teacher
+through the AEF network 81 / 14 / 5; the benchmark (seed 0, 200 sudden trials): 158 / 34 / 8,
+was 0 / 17 / 33 of 50 with the up-and-over interrupt (``docs/avoid_notes.md``, 2026-12-01).
 
 States, for the remembered boxes that were first seen within ``sudden_range`` of the leading
 foot, and for any box taller than ``step_over_height`` that a swing meets (``adopt``: the legs
