@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from neurocog_gym.locomotion.avoidance import (
     PASS,
@@ -174,3 +176,35 @@ def test_effectivity_adopts_the_box_an_interrupt_would_step_over():
     assert s.mode == MODE_PROVISION
     assert s.provision[0] == -1.0
     assert eff.avoidance.state == REVERSE
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.floats(-1.0, 1.5),
+            st.floats(-0.6, 0.6),
+            st.floats(0.0, 0.3),
+            st.floats(0.0, 0.3),
+            st.floats(0.0, 0.12),
+        ),  # fmt: skip
+        max_size=5,
+    ),
+    st.floats(-0.3, 1.0),
+    st.floats(-0.3, 0.3),
+    st.floats(-3.0, 3.0),
+)
+def test_any_scene_gives_a_bounded_provision_or_none(boxes, dx, dy, yaw):
+    av = SuddenAvoidance()
+    f, t, k = legs()
+    arr = np.array(
+        [[[x, y, 0.0], [x + ln, y + w, h]] for x, y, ln, w, h in boxes], dtype=float
+    ).reshape(-1, 2, 3)
+    av.update(0.0, 0.0, f, t, k, arr)
+    for i in range(1, 20):
+        f, t, k = legs(dx=dx * i / 20, dy=dy * i / 20)
+        out = av.update(0.01 * i, yaw * i / 20, f, t, k, arr)
+        assert out is None or (out.shape == (3,) and np.all(np.abs(out) <= 1.0))
+        assert (out is None) == (av.state == WALK)
+        for b in arr:
+            av.adopt(b, f)
