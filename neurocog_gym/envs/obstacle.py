@@ -195,8 +195,7 @@ class ObstacleEnv(QuadrupedEnv):
         mujoco.mj_forward(self.model, self.data)
         # The robot has looked at the scene before the trial starts: warm the map up.
         self._sense_and_perceive(force_frame=True)
-        for _ in range(self.warmup_cycles):
-            self.pipeline.step(self.frame.points, self._frame_origin, 0.0)
+        self.pipeline.warm_up(self.frame.points, self._frame_origin, self.warmup_cycles)
         self.tof.reset(seed=int(self.np_random.integers(2**31)))
         self._update_effectivity()
 

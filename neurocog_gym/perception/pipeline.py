@@ -242,6 +242,31 @@ class AttentionPipeline:
         Returns:
             The affordances detected on this cycle's graph.
         """
+        return self._step(points, sensor_origin, t, forward, ground_z, None)
+
+    def warm_up(
+        self, points: np.ndarray, sensor_origin: np.ndarray, cycles: int, forward=(1.0, 0.0, 0.0)
+    ) -> Affordances | None:
+        """Run ``cycles`` control cycles at t = 0 on one unchanging frame (the map's warm-up).
+
+        The same as ``cycles`` calls of :meth:`step` with these arguments, result for result;
+        the frame's view of the raw-point steps (``view_edge_kernel``) is computed once instead
+        of once per cycle, as nothing can change the frame between the cycles here.
+
+        Returns:
+            The last cycle's affordances (None if ``cycles`` is 0).
+        """
+        if cycles < 0:
+            raise ValueError(f"cycles must be >= 0, got {cycles}")
+        holder = [None]
+        aff = None
+        for _ in range(int(cycles)):
+            aff = self._step(points, sensor_origin, 0.0, forward, None, holder)
+        return aff
+
+    def _step(self, points, sensor_origin, t, forward, ground_z, holder) -> Affordances:
+        """:meth:`step`; ``holder``: a one-slot list keeping the frame's inputs between
+        calls on the same frame (:meth:`warm_up`), or None."""
         t0 = time.perf_counter()
         boxes = self.memory_boxes if len(self.memory_boxes) else None
         self.net.update(points, boxes)
@@ -253,7 +278,14 @@ class AttentionPipeline:
         t2 = time.perf_counter()
         walls = self.params.view_wall_width > 0.0 and self.params.view_cut >= 0.0
         if self.params.refine and (aff.obstacles or walls):
-            frame = _frame_inputs(aff, points, forward, sensor_origin)
+            if holder is None:
+                frame = _frame_inputs(aff, points, forward, sensor_origin)
+            else:
+                frame = holder[0]
+                if frame is None:
+                    frame = holder[0] = _frame_inputs(aff, points, forward, sensor_origin)
+                elif not math.isfinite(aff.ground_z):
+                    frame = None
             if frame is not None and aff.obstacles:
                 aff = self._refine(aff, points, forward, sensor_origin, frame)
             if frame is not None and walls:

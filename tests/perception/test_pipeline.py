@@ -294,6 +294,25 @@ def test_pipeline_step_runs_end_to_end_and_keeps_its_public_surface():
         assert np.all(np.isfinite(o.box))
 
 
+def test_warm_up_is_the_same_as_stepping_on_the_frame_cycle_by_cycle():
+    pts = _box_cloud((0.5, -0.1, 0.0), (0.7, 0.05, 0.07))
+    stepped, warmed = AttentionPipeline(seed=3), AttentionPipeline(seed=3)
+    for _ in range(80):
+        a_step = stepped.step(pts, ORIGIN, 0.0)
+    a_warm = warmed.warm_up(pts, ORIGIN, 80)
+    # The raw-point steps ran (the block is refined), so the shared view was used.
+    assert any(o.kind == "object" for o in a_warm.objects)
+    np.testing.assert_array_equal(warmed.net.nodes, stepped.net.nodes)
+    np.testing.assert_array_equal(warmed.attention_boxes, stepped.attention_boxes)
+    assert [(o.kind, o.height, o.width, o.length) for o in a_warm.objects] == [
+        (o.kind, o.height, o.width, o.length) for o in a_step.objects
+    ]
+    assert warmed.n_steps == stepped.n_steps == 80
+    assert AttentionPipeline().warm_up(pts, ORIGIN, 0) is None
+    with pytest.raises(ValueError, match="cycles must be >= 0"):
+        AttentionPipeline().warm_up(pts, ORIGIN, -1)
+
+
 @pytest.mark.parametrize("bad", [np.zeros((0, 3), np.float32), np.full((5, 3), np.nan)])
 def test_pipeline_refine_tolerates_degenerate_frames(bad):
     scene = _block_graph()
