@@ -265,8 +265,11 @@ class AttentionPipeline:
         return aff
 
     def _step(self, points, sensor_origin, t, forward, ground_z, holder) -> Affordances:
-        """:meth:`step`; ``holder``: a one-slot list keeping the frame's inputs between
-        calls on the same frame (:meth:`warm_up`), or None."""
+        """One cycle of :meth:`step`.
+
+        ``holder``: a one-slot list keeping the frame's inputs between calls on the same frame
+        (:meth:`warm_up`), or None.
+        """
         t0 = time.perf_counter()
         boxes = self.memory_boxes if len(self.memory_boxes) else None
         self.net.update(points, boxes)
