@@ -37,6 +37,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from benchlib import field_doc  # noqa: E402
 
@@ -87,6 +89,14 @@ class Args:
     checkpoint), where ``neurocog bench --policy OUT/model.zip`` finds them."""
     normalize_reward: bool = False
     """Scale the rewards by VecNormalize's running std of the discounted return (training only)."""
+    bc_steps: int = 0
+    """Behaviour-cloning warm start: env steps (over every env) of the paper's AEF controller
+    (``neurocog_gym.policies.AEFPolicy``, shipped weights) recorded before PPO; the policy's
+    action mean is fitted to its actions and the value net to the recorded discounted returns
+    (0: off, the policy starts at all zeros). A new run only (not with --resume); the cloned
+    policy is saved as OUT/checkpoints/ppo_0_steps.zip before PPO starts."""
+    bc_epochs: int = 30
+    """Epochs over the recorded steps of the behaviour-cloning fit."""
     net_arch: str = "128,128"
     """Hidden layer widths of the policy and value networks."""
     checkpoint_every: int = 20_000
@@ -124,6 +134,10 @@ def parse_args(argv: list[str] | None = None) -> Args:
         parser.error("--total-steps, --n-envs must be >= 1; --n-steps, --batch-size >= 2")
     if args.vec not in ("subproc", "spin", "dummy"):
         parser.error(f"--vec must be subproc, spin or dummy, got {args.vec!r}")
+    if args.bc_steps < 0 or args.bc_epochs < 1:
+        parser.error("--bc-steps must be >= 0 and --bc-epochs >= 1")
+    if args.bc_steps and args.resume:
+        parser.error("--bc-steps warm-starts a new run: not with --resume")
     if args.checkpoint_every < 1 or args.max_minutes < 0 or args.target_kl < 0:
         parser.error("--checkpoint-every must be >= 1, --max-minutes >= 0, --target-kl >= 0")
     try:
@@ -275,6 +289,102 @@ def _time_limit_callback(minutes: float):
     return TimeLimit()
 
 
+def _demonstrations(venv, steps: int, gamma: float, progress: bool):
+    """Run the AEF controller in ``venv`` for ``steps`` env steps (over every env).
+
+    Returns the raw observations (a dict of (T·n, ...) arrays), the actions, the discounted
+    returns (only of steps whose episode ended inside the recording; the rest are dropped) and
+    the outcome counts of the finished episodes.
+    """
+    from tqdm import tqdm
+
+    from neurocog_gym.policies import AEFPolicy
+
+    aef = AEFPolicy()
+    n = venv.num_envs
+    raw_of = getattr(venv, "get_original_obs", None)
+    obs = venv.reset()
+    rows = -(-steps // n)
+    keys = list(obs)
+    rec_obs = {k: [] for k in keys}
+    rec_act, rec_rew, rec_done = [], [], []
+    counts = {"success": 0, "touch": 0, "fail": 0}
+    for _ in tqdm(range(rows), desc="AEF demonstrations", unit="step", disable=not progress):
+        raw = raw_of() if raw_of is not None else obs
+        act = np.stack([aef({k: raw[k][i] for k in keys}) for i in range(n)])
+        for k in keys:
+            rec_obs[k].append(np.array(raw[k], copy=True))
+        obs, rew, done, infos = venv.step(act)
+        # VecNormalize hands back the raw rewards too (its reward scaling is for training).
+        rew = venv.get_original_reward() if hasattr(venv, "get_original_reward") else rew
+        rec_act.append(act)
+        rec_rew.append(np.asarray(rew, np.float64))
+        rec_done.append(np.asarray(done, bool))
+        for info, d in zip(infos, done, strict=True):
+            if d and "outcome" in info:
+                counts["fail" if not info.get("passed") else info["outcome"]] += 1
+    rew, done = np.array(rec_rew), np.array(rec_done)  # (T, n)
+    ret = np.full(rew.shape, np.nan)
+    run = np.full(n, np.nan)  # NaN until an episode end is seen (going backwards)
+    for t in range(rows - 1, -1, -1):
+        run = np.where(done[t], rew[t], rew[t] + gamma * run)
+        ret[t] = run
+    # Step-major, env within each step, as the returns' reshape below.
+    flat = {k: np.concatenate(rec_obs[k]) for k in keys}
+    return flat, np.concatenate(rec_act), ret.reshape(-1), counts
+
+
+def _clone(model, venv, args: Args) -> dict:
+    """Fit the PPO policy to the AEF controller's recorded behaviour (``--bc-steps``)."""
+    import torch
+
+    t0 = time.perf_counter()
+    obs, act, ret, counts = _demonstrations(venv, args.bc_steps, args.gamma, args.progress)
+    norm = getattr(venv, "normalize_obs", None)
+    if norm is not None:
+        obs = norm(obs)  # with the statistics gathered over the recording
+    policy = model.policy
+    policy.set_training_mode(True)
+    opt = torch.optim.Adam(policy.parameters(), lr=1e-3)
+    rng = np.random.default_rng(args.seed)
+    n = len(act)
+    act_t = torch.as_tensor(act, dtype=torch.float32)
+    ret_t = torch.as_tensor(ret, dtype=torch.float32)
+    has_ret = torch.isfinite(ret_t)
+    losses = []
+    for _ in range(args.bc_epochs):
+        order = rng.permutation(n)
+        tot = 0.0
+        for lo in range(0, n, args.batch_size):
+            ix = order[lo : lo + args.batch_size]
+            o, _ = policy.obs_to_tensor({k: v[ix] for k, v in obs.items()})
+            dist = policy.get_distribution(o)
+            loss = ((dist.distribution.mean - act_t[ix]) ** 2).mean()
+            m = has_ret[ix]
+            if bool(m.any()):
+                v = policy.predict_values(o).squeeze(-1)
+                loss = loss + 0.01 * ((v[m] - ret_t[ix][m]) ** 2).mean()
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            tot += float(loss.detach()) * len(ix)
+        losses.append(tot / n)
+    policy.set_training_mode(False)
+    with torch.no_grad():
+        o, _ = policy.obs_to_tensor(obs)
+        mse = float(((policy.get_distribution(o).distribution.mean - act_t) ** 2).mean())
+    return {
+        "steps": int(n),
+        "epochs": args.bc_epochs,
+        "aef_outcomes": counts,
+        "loss_first_epoch": round(losses[0], 6),
+        "loss_last_epoch": round(losses[-1], 6),
+        "action_mse": round(mse, 6),
+        "action_mse_of_zeros": round(float((act_t**2).mean()), 6),
+        "wall_s": round(time.perf_counter() - t0, 1),
+    }
+
+
 def train(args: Args) -> dict:
     """Train (or resume) PPO as ``args`` says; return the run summary (also written to disk)."""
     import torch
@@ -322,6 +432,19 @@ def train(args: Args) -> dict:
             tensorboard_log=tb, verbose=0,
             policy_kwargs={"log_std_init": args.log_std_init, "net_arch": _net_arch(args.net_arch)},
         )  # fmt: skip
+    bc = None
+    if args.bc_steps and ckpt is None:
+        bc = _clone(model, env, args)
+        # The cloned policy as the run's step-0 checkpoint (with its statistics): benchable on
+        # its own, and what --resume starts from if PPO is killed before its first checkpoint.
+        zip0 = out / "checkpoints" / "ppo_0_steps.zip"
+        zip0.parent.mkdir(parents=True, exist_ok=True)
+        if use_stats:
+            _save_stats(env, stats_path(zip0))
+        with atomic_path(zip0) as tmp:
+            model.save(tmp)
+        atomic_write_text(out / "bc_summary.json", json.dumps(bc, indent=2) + "\n")
+        print(f"behaviour cloning: {bc}", flush=True)
     done_before = int(model.num_timesteps)
     remaining = args.total_steps - done_before
     outcome = _outcome_callback()
@@ -372,6 +495,7 @@ def train(args: Args) -> dict:
         "fails_this_session": outcome.fails,
         "sudden_blocks_this_session": outcome.blocks,
         "normalize_obs": args.normalize_obs,
+        "behaviour_cloning": bc,
         "model": str(out / "model.zip"),
     }
     atomic_write_text(out / "train_summary.json", json.dumps(summary, indent=2) + "\n")
