@@ -51,6 +51,9 @@ class Args:
     """Gymnasium id to train on."""
     total_steps: int = 200_000
     """Env steps in all (over every env), resumed runs included."""
+    env_kwargs: str = ""
+    """JSON object of keyword arguments for gymnasium.make, e.g. '{"touch_cost": 50}' (the
+    training envs only; neurocog bench evaluates on the registered env)."""
     n_envs: int = 2
     """Parallel envs."""
     vec: str = "spin"
@@ -141,6 +144,10 @@ def parse_args(argv: list[str] | None = None) -> Args:
     if args.checkpoint_every < 1 or args.max_minutes < 0 or args.target_kl < 0:
         parser.error("--checkpoint-every must be >= 1, --max-minutes >= 0, --target-kl >= 0")
     try:
+        _env_kwargs(args.env_kwargs)
+    except ValueError as e:  # json.JSONDecodeError is a ValueError
+        parser.error(f"--env-kwargs must be a JSON object of gymnasium.make arguments: {e}")
+    try:
         _net_arch(args.net_arch)
     except ValueError:
         parser.error(f"--net-arch must be comma-separated positive integers, got {args.net_arch!r}")
@@ -162,6 +169,16 @@ def _make_one(env_id: str, **kwargs):
     return gym.make(env_id, **kwargs)
 
 
+def _env_kwargs(text: str) -> dict:
+    """The parsed ``--env-kwargs`` (empty: none); ValueError unless a JSON object."""
+    if not text.strip():
+        return {}
+    kw = json.loads(text)
+    if not isinstance(kw, dict):
+        raise ValueError(f"not a JSON object: {text!r}")
+    return kw
+
+
 def _make_vec_env(args: Args):
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
@@ -171,7 +188,7 @@ def _make_vec_env(args: Args):
     cls = {"subproc": SubprocVecEnv, "spin": SpinVecEnv}.get(args.vec, DummyVecEnv)
     if args.n_envs == 1:
         cls = DummyVecEnv
-    make = functools.partial(_make_one, args.env_id)
+    make = functools.partial(_make_one, args.env_id, **_env_kwargs(args.env_kwargs))
     return make_vec_env(make, n_envs=args.n_envs, seed=args.seed, vec_env_cls=cls)
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 
@@ -49,7 +51,8 @@ class SuddenObstacleEnv(ObstacleEnv):
 
     ## Rewards
 
-    As ``NeuroCog/Walk-v0``, plus ``reward_touch`` = -1 on each new contact with an obstacle and
+    As ``NeuroCog/Walk-v0``, plus ``reward_touch`` = -``touch_cost`` (default 1) on each new
+    contact with an obstacle and
     ``reward_pass`` = +100 when the robot passes (the episode ends there; 100 = 1 / (1 - 0.99)
     stands in for the walk that would follow, see ``_reward``).
 
@@ -64,6 +67,8 @@ class SuddenObstacleEnv(ObstacleEnv):
     As ``WalkEnv``, plus ``appear_window`` (s, default (1.0, 2.0)), ``appear_deadline`` (s, 1.0),
     ``pair_probability`` (0.3),
     ``min_gap`` (m, 0.01: closest a new block may come to the robot), ``placement_tries`` (5),
+    ``touch_cost`` (1.0: the reward lost per new contact with a block; with the pass bonus of 100
+    a touched pass earns nearly what a clean one does — raise it to make touching matter),
     ``tof`` (``ToFParams``), ``perception`` (``PipelineParams``: ``gng="gng"`` switches the
     attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``.
     """  # noqa: E501
@@ -75,8 +80,12 @@ class SuddenObstacleEnv(ObstacleEnv):
         pair_probability: float = 0.3,
         min_gap: float = 0.01,
         placement_tries: int = 5,
+        touch_cost: float = 1.0,
         **kwargs,
     ):
+        if not (math.isfinite(touch_cost) and touch_cost >= 0.0):
+            raise ValueError(f"touch_cost must be a finite number >= 0, got {touch_cost}")
+        self.touch_cost = float(touch_cost)
         lo, hi = appear_window
         if not (0.0 <= lo <= hi):
             raise ValueError(
@@ -101,7 +110,8 @@ class SuddenObstacleEnv(ObstacleEnv):
         EzPickle.__init__(
             self, appear_window=appear_window, appear_deadline=appear_deadline,
             pair_probability=pair_probability,
-            min_gap=min_gap, placement_tries=placement_tries, **self._ezpickle_kwargs,
+            min_gap=min_gap, placement_tries=placement_tries, touch_cost=touch_cost,
+            **self._ezpickle_kwargs,
         )  # fmt: skip
 
     def _place_initial_obstacles(self) -> None:
@@ -199,7 +209,7 @@ class SuddenObstacleEnv(ObstacleEnv):
         return out
 
     def _reward(self, x_vel: float, power: float) -> tuple[float, dict]:
-        """The walk's reward, ``reward_touch`` -1 per new contact, ``reward_pass`` +100 on passing.
+        """The walk's reward, ``reward_touch`` -touch_cost per contact, ``reward_pass`` +100.
 
         Passing ends the episode, so its bonus stands in for the walk that would follow it:
         100 = 1 / (1 - 0.99), what walking on at the best per-step reward (1) would be worth at
@@ -208,7 +218,8 @@ class SuddenObstacleEnv(ObstacleEnv):
         truncates the episode keeps it (learners bootstrap on truncation).
         """
         r, terms = super()._reward(x_vel, power)
-        touch = -1.0 if (self._was_touching and self.touch_events and self._new_touch()) else 0.0
+        new = self._was_touching and self.touch_events and self._new_touch()
+        touch = -self.touch_cost if new else 0.0
         passed = 100.0 if self.passed else 0.0
         terms.update(reward_touch=touch, reward_pass=passed)
         return r + touch + passed, terms

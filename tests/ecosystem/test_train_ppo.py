@@ -100,6 +100,10 @@ def test_bad_arguments_exit_2():
     assert r.returncode == 2 and "--vec" in r.stderr
     r = _run(str(SCRIPT), "--target-kl", "-0.1")
     assert r.returncode == 2 and "--target-kl" in r.stderr
+    r = _run(str(SCRIPT), "--env-kwargs", "[1, 2]")
+    assert r.returncode == 2 and "--env-kwargs" in r.stderr
+    r = _run(str(SCRIPT), "--env-kwargs", "{touch_cost: 5}")
+    assert r.returncode == 2 and "--env-kwargs" in r.stderr
     r = _run(str(SCRIPT), "--resume", "--out", "/nonexistent/ppo_run")
     assert r.returncode == 2 and "no checkpoint" in r.stderr
 
@@ -131,7 +135,8 @@ def test_train_with_subproc_vec_env(tmp_path):
     out = tmp_path / "ppo_subproc"
     # with a behaviour-cloning warm start through VecNormalize (raw observations to the AEF)
     r = _run(str(SCRIPT), "--total-steps", "128", "--out", str(out), "--vec", "subproc",
-             "--no-tensorboard", "--bc-steps", "64", "--bc-epochs", "2", *TINY)  # fmt: skip
+             "--no-tensorboard", "--bc-steps", "64", "--bc-epochs", "2",
+             "--env-kwargs", '{"touch_cost": 50}', *TINY)  # fmt: skip
     assert r.returncode == 0, r.stderr
     s = json.loads((out / "train_summary.json").read_text())
     assert s["total_steps"] == 128 and s["n_envs"] == 2 and s["vec"] == "subproc"

@@ -217,9 +217,10 @@ def _terms_add_up(r, info):
     return r == pytest.approx(sum(info[k] for k in parts))
 
 
-def test_reward_touch_penalty_once_per_contact_then_pass_bonus():
-    """-1 on the cycle a new contact begins (not while it lasts), +100 on the passing cycle."""
-    env = gym.make(STATIC, n_blocks=(1, 1))
+@pytest.mark.parametrize("cost", [1.0, 50.0])
+def test_reward_touch_penalty_once_per_contact_then_pass_bonus(cost):
+    """-touch_cost on the cycle a new contact begins (not while it lasts), +100 on passing."""
+    env = gym.make(STATIC, n_blocks=(1, 1), touch_cost=cost)
     env.reset(seed=0)
     u = env.unwrapped
     foot = u.data.site_xpos[u.robot.foot_site[0]].copy()
@@ -231,8 +232,8 @@ def test_reward_touch_penalty_once_per_contact_then_pass_bonus():
         touches.append(info["reward_touch"])
         if info["touch_events"] >= 1 and not u._was_touching:
             break  # the first contact has ended
-    assert info["touch_events"] >= 1 and touches.count(-1.0) == info["touch_events"]
-    assert set(touches) <= {0.0, -1.0}
+    assert info["touch_events"] >= 1 and touches.count(-cost) == info["touch_events"]
+    assert set(touches) <= {0.0, -cost}
     u.data.qpos[0] += 1.0
     mujoco.mj_forward(u.model, u.data)
     _, r, term, _, info = env.step(np.zeros(15, np.float32))
@@ -253,3 +254,14 @@ def test_sudden_pass_bonus_outweighs_walking_on():
     assert term and info["passed"] and _terms_add_up(r, info)
     assert info["reward_tracking"] <= 1.0
     assert info["reward_pass"] >= 1.0 / (1.0 - 0.99)
+
+
+def test_touch_cost_is_checked_and_survives_pickling():
+    import pickle
+
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="touch_cost"):
+            gym.make(SUDDEN, touch_cost=bad)
+    for env_id in (SUDDEN, STATIC):
+        env = gym.make(env_id, touch_cost=20.0)
+        assert pickle.loads(pickle.dumps(env)).unwrapped.touch_cost == 20.0
