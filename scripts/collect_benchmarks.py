@@ -19,6 +19,7 @@ ORDER = [
     "attention",
     "nsga",
     "env",
+    "env_history",
     "env_compare",
     "aef",
     "bench",
