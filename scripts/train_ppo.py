@@ -85,7 +85,8 @@ class Args:
     1.5 x this (SB3's target_kl); 0 for no limit."""
     log_std_init: float = -2.0
     """Initial log std of the Gaussian actions (-2: spread 0.135 around zero = CPG walking;
-    with -1, spread 0.37, the zero-mean policy passed 1 sudden block in 20)."""
+    with -1, spread 0.37, the zero-mean policy passed 1 sudden block in 20; -3.5, spread 0.03,
+    around a --bc-steps clone)."""
     normalize_obs: bool = True
     """Normalise the observations with VecNormalize (running mean / std of every Box key);
     its statistics are saved as OUT/vecnormalize.pkl beside model.zip (and with every
@@ -97,7 +98,10 @@ class Args:
     (``neurocog_gym.policies.AEFPolicy``, shipped weights) recorded before PPO; the policy's
     action mean is fitted to its actions and the value net to the recorded discounted returns
     (0: off, the policy starts at all zeros). A new run only (not with --resume); the cloned
-    policy is saved as OUT/checkpoints/ppo_0_steps.zip before PPO starts."""
+    policy is saved as OUT/checkpoints/ppo_0_steps.zip before PPO starts. Pair it with a small
+    action spread: with --log-std-init -3.5 and --env-kwargs '{"touch_cost": 50}', 35 min of PPO
+    from the clone beat the AEF (docs/benchmarks_ppo.md); with the default -2 the clone failed
+    two thirds of its training episodes and PPO drifted off."""
     bc_epochs: int = 30
     """Epochs over the recorded steps of the behaviour-cloning fit."""
     net_arch: str = "128,128"

@@ -314,3 +314,18 @@ def test_ray_cluster_address(tmp_path):
                 pass
         log.close()
         shutil.rmtree(ray_tmp, ignore_errors=True)
+
+
+def test_pool_worker_keeps_torch_to_one_thread():
+    """Each bench worker is one process per core: torch's intra-op threads are held to one."""
+    torch = pytest.importorskip("torch")
+    before = torch.get_num_threads()
+    try:
+        torch.set_num_threads(2)
+        runner._init_worker("blind", "on", 1.0, runner.SimilaritySettings())
+        assert torch.get_num_threads() == 2  # the serial path runs in the caller's process
+        runner._init_pool_worker("blind", "on", 1.0, runner.SimilaritySettings())
+        assert torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
+        runner._WORKER.clear()
