@@ -146,7 +146,7 @@ def _load_sb3(path: Path):
     raise ValueError(f"{path} is not a stable-baselines3 model ({errors[0]})")
 
 
-POLICY_NAMES = ("aef", "aef-provision", "blind", "avoid")
+POLICY_NAMES = ("aef", "aef-provision", "blind", "avoid", "ppo")
 """Named policies; anything else is a file (AEF weights or a stable-baselines3 model)."""
 
 
@@ -160,6 +160,10 @@ def make_policy(spec: str):
     * ``"avoid"``: :class:`neurocog_gym.avoid.AvoidPolicy` (the back-off / side-step reflex for
       sudden blocks on top of ``aef-provision``; bind it with ``policy.reset(env)`` after each
       ``env.reset``);
+    * ``"ppo"``: the shipped stable-baselines3 PPO policy (:class:`SB3Policy` on
+      ``assets/ppo_sudden/model.zip`` and its observation statistics): cloned from the AEF,
+      then 35 min of PPO on ``SuddenObstacle-v0`` (``assets/ppo_sudden/args.json``,
+      ``train_summary.json``; docs/benchmarks_ppo.md);
     * a path ending in ``.npz``: :class:`AEFPolicy` with those weights;
     * any other path: a saved stable-baselines3 model (:class:`SB3Policy`).
     """
@@ -175,6 +179,12 @@ def make_policy(spec: str):
         from neurocog_gym.avoid import AvoidPolicy
 
         return AvoidPolicy()
+    if spec == "ppo":
+        from neurocog_gym import paths
+
+        policy = SB3Policy(paths.asset(paths.PPO_MODEL))
+        policy.name = "ppo"
+        return policy
     if spec.endswith(".npz"):
         return AEFPolicy(weights=spec)
     return SB3Policy(spec)

@@ -81,6 +81,7 @@ def run_label(config: dict) -> str:
         "aef-provision": "AEF provision only",
         "blind": "blind",
         "avoid": "avoid reflex + AEF provision",
+        "ppo": "PPO (shipped)",
     }
     if policy not in names:
         policy = Path(policy).stem

@@ -86,8 +86,8 @@ class BenchConfig:
     seed: int = 0
     """Run seed S; trial seeds derive from (S, scenario, index)."""
     policy: str = "aef"
-    """"aef", "aef-provision", "blind", "avoid", AEF weights (.npz) or a saved stable-baselines3
-    model."""
+    """"aef", "aef-provision", "blind", "avoid", "ppo" (the shipped PPO policy), AEF weights
+    (.npz) or a saved stable-baselines3 model."""
     attention: str = "on"
     """"on": DD-GNG attention; "off": plain GNG (the ablation)."""
     max_seconds: float | None = None

@@ -109,3 +109,27 @@ def test_sb3_policy_explicit_statistics(saved, tmp_path):
     (tmp_path / "bad.pkl").write_bytes(__import__("pickle").dumps({"not": "stats"}))
     with pytest.raises(ValueError, match="not a VecNormalize"):
         SB3Policy(out / "model.zip", vecnormalize=tmp_path / "bad.pkl")
+
+
+def test_shipped_ppo_policy_acts_on_the_obstacle_env():
+    """``make_policy("ppo")``: the shipped model and its statistics, on its training env."""
+    import json
+
+    from neurocog_gym import paths
+
+    policy = make_policy("ppo")
+    assert policy.name == "ppo" and policy.obs_normalizer is not None
+    args = json.loads((paths.asset("ppo_sudden") / "args.json").read_text())
+    assert args["env_id"] == "NeuroCog/SuddenObstacle-v0"
+    env = gym.make(args["env_id"])
+    obs, _ = env.reset(seed=0)
+    for _ in range(5):
+        action = policy(obs)
+        assert action.shape == (15,) and action.dtype == np.float32
+        assert env.action_space.contains(action)
+        assert np.array_equal(action, policy(obs))  # deterministic
+        obs, *_ = env.step(action)
+    # The statistics are the ones it was trained with, not identity: normalising moves obs.
+    norm = policy.obs_normalizer.normalize_obs(obs)
+    assert not np.allclose(norm["joint_pos"], obs["joint_pos"])
+    env.close()
