@@ -4,7 +4,6 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
 
 import neurocog_gym
 from neurocog_gym.robot.model import RobotIndex, load_model
@@ -32,12 +31,6 @@ def rollout(env, seed, steps, action_seed=None):
 def test_registered():
     assert WALK in gym.registry
     assert WALK in neurocog_gym.ENV_IDS
-
-
-def test_check_env():
-    env = gym.make(WALK)
-    check_env(env.unwrapped, skip_render_check=True)
-    env.close()
 
 
 def test_same_seed_same_episode_bit_for_bit():
