@@ -1,4 +1,4 @@
-"""A picture strip of the AEF (or the avoid reflex) on a sudden block (the README's strip).
+"""A picture strip of the AEF (or the avoid reflex, or the shipped PPO policy) on a sudden block.
 
 One seeded ``NeuroCog/SuddenObstacle-v0`` episode under ``--policy aef`` (the AEF network on the
 observation; its stop / side-step / pass comes from the effectivity's provision teacher,
@@ -32,7 +32,7 @@ from neurocog_gym.policies import make_policy, start_episode  # noqa: E402
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--policy", default="aef", choices=("aef", "avoid"), help="controller")
+    ap.add_argument("--policy", default="aef", choices=("aef", "avoid", "ppo"), help="controller")
     ap.add_argument("--seed", type=int, default=1, help="episode seed")
     ap.add_argument("--width", type=int, default=400, help="width of one frame, pixels")
     ap.add_argument("--height", type=int, default=360, help="frame height, pixels")
