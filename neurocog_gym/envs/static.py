@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from neurocog_gym.envs.sudden import SuddenObstacleEnv
-from neurocog_gym.robot.obstacles import Block, random_block
+from neurocog_gym.robot.obstacles import N_SLOTS, Block, random_block
 
 
 class StaticObstacleEnv(SuddenObstacleEnv):
@@ -27,8 +27,11 @@ class StaticObstacleEnv(SuddenObstacleEnv):
         lateral: float = 0.1,
         **kwargs,
     ):
-        if not (1 <= n_blocks[0] <= n_blocks[1] <= 6):
-            raise ValueError(f"n_blocks must be (lo, hi) with 1 <= lo <= hi <= 6, got {n_blocks}")
+        if not (1 <= n_blocks[0] <= n_blocks[1] <= N_SLOTS):
+            raise ValueError(
+                f"n_blocks must be (lo, hi) with 1 <= lo <= hi <= {N_SLOTS} (the scene's block "
+                f"slots), got {n_blocks}"
+            )
         self.n_blocks = (int(n_blocks[0]), int(n_blocks[1]))
         self.first_distance = (float(first_distance[0]), float(first_distance[1]))
         self.lateral = float(lateral)
