@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -97,3 +98,167 @@ def test_as_slice_only_for_runs():
     assert isinstance(_as_slice(ix), np.ndarray) and np.array_equal(_as_slice(ix), ix)
     x = np.arange(20.0)
     assert np.array_equal(x[_as_slice(np.arange(3, 15))], x[np.arange(3, 15)])
+
+
+# -- outcome v1 kernels -------------------------------------------------------------------------
+
+
+def _pose(yaw=0.0, pos=(0.0, 0.0, 0.035)):
+    """One body (id 0) at ``pos`` turned by ``yaw``: xpos (1, 3), xmat (1, 9), xquat (1, 4)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    xmat = np.array([[c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0]])
+    xquat = np.array([[np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]])
+    return np.array([pos], dtype=float), xmat, xquat
+
+
+HALF = np.array([[0.04, 0.10, 0.035]])  # an 8 x 20 x 7 cm block
+
+
+def _walk(path, yaw=0.0, heading=(1.0, 0.0)):
+    """Run step_over_step along one foot's path (the other three feet stay far behind)."""
+    from neurocog_gym.envs._kernels import step_over_step
+
+    xpos, xmat, _ = _pose(yaw)
+    state = np.full((1, 4), -1, np.int8)
+    crossed = np.zeros((1, 4), bool)
+    sign = np.ones(1)
+    prev = np.zeros((4, 3))
+    for i, (x, y) in enumerate(path):
+        feet = np.array([[x, y, 0.02], [-1.0, 0, 0], [-1.0, 0, 0], [-1.0, 0, 0]])
+        step_over_step(feet, prev, i > 0, np.array(heading), 1, np.array([0]), xpos, xmat,
+                       HALF, sign, state, crossed)  # fmt: skip
+        prev = feet
+    return bool(crossed[0, 0])
+
+
+def _line(a, b, n=40):
+    return [tuple(a + (b - a) * t) for t in np.linspace(0, 1, n)]
+
+
+def test_step_over_a_foot_path_over_the_block_crosses_it():
+    over = _line(np.array([-0.2, 0.0]), np.array([0.2, 0.05]))
+    assert _walk(over)
+    # One long stride from before the near face to beyond the far face (no sample above it):
+    # the straight segment stays within the width, so it crossed above the block.
+    assert _walk([(-0.1, 0.0), (0.1, 0.02)])
+
+
+def test_walking_round_the_block_is_not_stepping_over_it():
+    a, b, c, d = map(np.array, ([-0.2, 0.0], [-0.06, 0.0], [-0.06, 0.15], [0.2, 0.15]))
+    assert not _walk(_line(a, b) + _line(b, c) + _line(c, d))
+    # Round it, then sideways back behind the far face: never above the footprint.
+    assert not _walk(_line(a, b) + _line(b, c) + _line(c, d) + _line(d, np.array([0.2, 0.0])))
+    # Over the near part of the block, then out at its side before the far face.
+    e = np.array([0.0, 0.13])
+    assert not _walk(_line(a, b) + _line(b, e) + _line(e, np.array([0.2, 0.13])))
+    # A diagonal stride whose straight segment leaves the width over the length.
+    assert not _walk([(-0.1, 0.0), (0.1, 0.25)])
+
+
+def test_step_over_follows_the_block_frame_and_the_walking_direction():
+    yaw = 0.3
+    c, s = np.cos(yaw), np.sin(yaw)
+    along = [(u * c, u * s) for u in np.linspace(-0.2, 0.2, 40)]
+    assert _walk(along, yaw=yaw)
+    # Walking the other way (heading -x): the far face is the other one, the path goes backward.
+    assert not _walk(along, yaw=yaw, heading=(-1.0, 0.0))
+    assert _walk(along[::-1], yaw=yaw, heading=(-1.0, 0.0))
+    # A foot that starts over the block (not before its near face) is never armed.
+    assert not _walk(_line(np.array([0.0, 0.0]), np.array([0.2, 0.0])))
+
+
+def _outcome_step(contacts, xpos, xmat, xquat, state, placed=None, mass_g=40.0):
+    """block_outcome_step with geom 0 = block slot 0 and geom 1 = a robot geom."""
+    from neurocog_gym.envs._kernels import block_outcome_step
+
+    geom, pos, frame, force = contacts
+    n = len(force)  # contacts
+    placed_pos, placed_quat = placed if placed is not None else (xpos.copy(), xquat.copy())
+    return block_outcome_step(
+        np.array(geom, np.int32).reshape(n, 2), np.array(pos, float).reshape(n, 3),
+        np.array(frame, float).reshape(n, 9), np.arange(n, dtype=np.int32) * 4,
+        np.full(n, 3, np.int32), np.repeat(np.array(force, float) / 4, 4), False,
+        np.array([0, -1]), np.array([False, True]), 1, np.array([0]), xpos, xmat, xquat, HALF,
+        placed_pos, placed_quat, np.cos(np.radians(30)), 0.01, 0.1 * mass_g, 3, 0.02,
+        np.cos(np.radians(10) / 2), *state,
+    )  # fmt: skip
+
+
+def _fresh():
+    return (np.zeros(1, bool), np.zeros(1), np.zeros(1, np.int64), np.zeros(1, bool),
+            np.zeros(1), np.zeros(1), np.zeros(1, bool))  # fmt: skip
+
+
+UP = [0, 0, 1, 1, 0, 0, 0, 1, 0]
+SIDE = [-1, 0, 0, 0, 1, 0, 0, 0, 1]
+
+
+def test_stood_on_needs_weight_on_the_top_face_for_three_cycles():
+    xpos, xmat, xquat = _pose()
+    state = _fresh()
+    top = ([0, 1], [0.01, 0.02, 0.07], UP, [5.0])  # 5 N >= 10 % of 40 N, on the top face
+    for cycle in range(3):
+        assert _outcome_step(top, xpos, xmat, xquat, state)
+        assert state[0][0] and state[1][0] == pytest.approx(5.0)
+        assert state[3][0] == (cycle == 2)  # stood on at the third cycle in a row
+    # Geoms in the other order: the normal points from the robot down to the block.
+    state = _fresh()
+    down = [0, 0, -1, 1, 0, 0, 0, -1, 0]
+    for _ in range(3):
+        _outcome_step(([1, 0], [0.0, 0.0, 0.07], down, [5.0]), xpos, xmat, xquat, state)
+    assert state[3][0]
+
+
+@pytest.mark.parametrize(
+    "contact",
+    [
+        ([0, 1], [0.01, 0.02, 0.07], UP, [3.0]),  # too light: 3 N < 4 N
+        ([0, 1], [-0.04, 0.0, 0.03], SIDE, [30.0]),  # a side push, however hard
+        ([0, 1], [0.01, 0.02, 0.05], UP, [30.0]),  # 2 cm under the top face
+        ([0, 1], [0.08, 0.0, 0.07], UP, [30.0]),  # beyond the face's edge
+    ],
+)
+def test_no_stand_without_weight_on_the_top_face(contact):
+    xpos, xmat, xquat = _pose()
+    state = _fresh()
+    for _ in range(5):
+        assert _outcome_step(contact, xpos, xmat, xquat, state)  # touching all the same
+    assert not state[3][0] and state[2][0] == 0
+
+
+def test_a_weight_that_lifts_resets_the_run():
+    xpos, xmat, xquat = _pose()
+    state = _fresh()
+    top = ([0, 1], [0.0, 0.0, 0.07], UP, [5.0])
+    none = ([], [], [], [])
+    for c in (top, top, none, top, top):
+        _outcome_step(c, xpos, xmat, xquat, state)
+    assert not state[3][0] and state[2][0] == 2
+
+
+@pytest.mark.parametrize(
+    ("shift", "yaw", "tilt_deg", "knocked"),
+    [
+        ((0.015, 0.0), 0.0, 0.0, False),
+        ((0.015, 0.015), 0.0, 0.0, True),  # 2.1 cm
+        ((0.0, 0.0), np.radians(9.0), 0.0, False),
+        ((0.0, 0.0), np.radians(11.0), 0.0, True),
+        ((0.0, 0.0), 0.0, 11.0, True),  # tipped about x: any axis counts
+        ((0.0, 0.0), 0.0, 9.0, False),
+    ],
+)
+def test_knocked_when_moved_two_cm_or_turned_ten_degrees(shift, yaw, tilt_deg, knocked):
+    xpos0, xmat0, xquat0 = _pose(0.1)
+    placed = (xpos0.copy(), xquat0.copy())
+    # The block now: shifted, turned about z by yaw, then tipped about x by tilt.
+    q_yaw = np.array([np.cos((0.1 + yaw) / 2), 0, 0, np.sin((0.1 + yaw) / 2)])
+    t = np.radians(tilt_deg) / 2
+    q = np.empty(4)
+    mujoco.mju_mulQuat(q, q_yaw, np.array([np.cos(t), np.sin(t), 0, 0]))
+    mat = np.empty(9)
+    mujoco.mju_quat2Mat(mat, q)
+    xpos = xpos0 + np.array([[shift[0], shift[1], 0.0]])
+    state = _fresh()
+    assert not _outcome_step(([], [], [], []), xpos, mat[None], q[None], state, placed)
+    assert state[6][0] == knocked
+    assert state[4][0] == pytest.approx(np.hypot(*shift))
