@@ -2,9 +2,9 @@
 
 Importing the package registers every environment id (SPEC §9):
 
-* ``NeuroCog/Walk-v0`` — flat-ground trotting on the CPG.
-* ``NeuroCog/SuddenObstacle-v0`` — a block appears in a front leg's swing path (§6.5.1).
-* ``NeuroCog/StaticObstacle-v0`` — blocks lie across the path (§6.5.2).
+* ``NeuroCog/Walk-v1`` — flat-ground trotting on the CPG.
+* ``NeuroCog/SuddenObstacle-v1`` — a block appears in a front leg's swing path (§6.5.1).
+* ``NeuroCog/StaticObstacle-v1`` — blocks lie across the path (§6.5.2).
 """
 
 from __future__ import annotations
@@ -21,28 +21,28 @@ __version__ = "0.1.0"
 __all__ = ["ENV_IDS", "__version__"]
 
 ENV_IDS: tuple[str, ...] = (
-    "NeuroCog/Walk-v0",
-    "NeuroCog/SuddenObstacle-v0",
-    "NeuroCog/StaticObstacle-v0",
+    "NeuroCog/Walk-v1",
+    "NeuroCog/SuddenObstacle-v1",
+    "NeuroCog/StaticObstacle-v1",
 )
 
 # vector_entry_point: ``gymnasium.make_vec(id, n)`` (mode None or "vector_entry_point") gives a
 # SpinVectorEnv (neurocog_gym/vector.py): the sync mode's sub-envs, stepped in parallel processes
 # that wait for each other by spinning on shared memory (docs/benchmarks_env.md says why).
 register(
-    id="NeuroCog/Walk-v0",
+    id="NeuroCog/Walk-v1",
     entry_point="neurocog_gym.envs.walk:WalkEnv",
     vector_entry_point="neurocog_gym.vector:walk_vector",
     max_episode_steps=2000,
 )
 register(
-    id="NeuroCog/SuddenObstacle-v0",
+    id="NeuroCog/SuddenObstacle-v1",
     entry_point="neurocog_gym.envs.sudden:SuddenObstacleEnv",
     vector_entry_point="neurocog_gym.vector:sudden_obstacle_vector",
     max_episode_steps=700,
 )
 register(
-    id="NeuroCog/StaticObstacle-v0",
+    id="NeuroCog/StaticObstacle-v1",
     entry_point="neurocog_gym.envs.static:StaticObstacleEnv",
     vector_entry_point="neurocog_gym.vector:static_obstacle_vector",
     max_episode_steps=1000,

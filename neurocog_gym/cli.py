@@ -289,12 +289,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("record-video",
                        help="an episode to MP4 with the attention graph, facets and footholds",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
-    p.add_argument("--env", default="NeuroCog/SuddenObstacle-v0",
+    p.add_argument("--env", default="NeuroCog/SuddenObstacle-v1",
                    help="registered env id (see neurocog info)")  # fmt: skip
     p.add_argument("--policy", default="aef",
                    help="aef, aef-provision (interrupts off), blind, avoid, ppo (the shipped "
                         "PPO policy), AEF weights (.npz) or a stable-baselines3 model (.zip); "
-                        "Walk-v0 takes blind or a model trained on it")  # fmt: skip
+                        "Walk-v1 takes blind or a model trained on it")  # fmt: skip
     p.add_argument("--seconds", type=_positive_float, default=7.0,
                    help="simulated seconds (the episode may end sooner: fell or passed)",
                    )  # fmt: skip

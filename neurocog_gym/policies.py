@@ -163,7 +163,9 @@ def make_policy(spec: str):
     * ``"ppo"``: the shipped stable-baselines3 PPO policy (:class:`SB3Policy` on
       ``assets/ppo_sudden/model.zip`` and its observation statistics): cloned from the AEF,
       then 35 min of PPO on ``SuddenObstacle-v0`` (``assets/ppo_sudden/args.json``,
-      ``train_summary.json``; docs/benchmarks_ppo.md);
+      ``train_summary.json``; docs/benchmarks_ppo.md). The v1 envs replaced v0 (another body,
+      1-D observation keys), so until it is retrained on v1 (issue 24) this raises a
+      ``ValueError`` that says so (:func:`shipped_ppo_env`);
     * a path ending in ``.npz``: :class:`AEFPolicy` with those weights;
     * any other path: a saved stable-baselines3 model (:class:`SB3Policy`).
     """
@@ -180,14 +182,33 @@ def make_policy(spec: str):
 
         return AvoidPolicy()
     if spec == "ppo":
-        from neurocog_gym import paths
-
+        env_id = shipped_ppo_env()
+        if env_id not in _registered_ids():
+            raise ValueError(
+                f"the shipped PPO policy (assets/ppo_sudden) was trained on the v0 envs "
+                f"({env_id}), which v1 replaced: it must be retrained on "
+                "NeuroCog/SuddenObstacle-v1 (issue 24); give a model of your own as a .zip path"
+            )
         policy = SB3Policy(paths.asset(paths.PPO_MODEL))
         policy.name = "ppo"
         return policy
     if spec.endswith(".npz"):
         return AEFPolicy(weights=spec)
     return SB3Policy(spec)
+
+
+def shipped_ppo_env() -> str:
+    """The env id the shipped PPO policy was trained on (``assets/ppo_sudden/args.json``)."""
+    import json
+
+    args = paths.asset(paths.PPO_MODEL).with_name("args.json")
+    return str(json.loads(args.read_text())["env_id"])
+
+
+def _registered_ids() -> tuple[str, ...]:
+    import neurocog_gym
+
+    return neurocog_gym.ENV_IDS
 
 
 def start_episode(policy, env) -> None:

@@ -11,7 +11,7 @@ on the same env factories (``tests/ecosystem/test_spin_vector.py``).
     from stable_baselines3.common.env_util import make_vec_env
     from neurocog_gym.sb3_vec import SpinVecEnv
 
-    venv = make_vec_env("NeuroCog/SuddenObstacle-v0", n_envs=2, seed=0, vec_env_cls=SpinVecEnv)
+    venv = make_vec_env("NeuroCog/SuddenObstacle-v1", n_envs=2, seed=0, vec_env_cls=SpinVecEnv)
 """
 
 from __future__ import annotations

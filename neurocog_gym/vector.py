@@ -781,15 +781,15 @@ def make_spin_vector(env_id: str, num_envs: int = 1, **env_kwargs) -> SpinVector
 
 
 def walk_vector(num_envs: int = 1, **env_kwargs) -> SpinVectorEnv:
-    """Vector entry point of ``NeuroCog/Walk-v0`` (see :func:`make_spin_vector`)."""
-    return make_spin_vector("NeuroCog/Walk-v0", num_envs, **env_kwargs)
+    """Vector entry point of ``NeuroCog/Walk-v1`` (see :func:`make_spin_vector`)."""
+    return make_spin_vector("NeuroCog/Walk-v1", num_envs, **env_kwargs)
 
 
 def sudden_obstacle_vector(num_envs: int = 1, **env_kwargs) -> SpinVectorEnv:
-    """Vector entry point of ``NeuroCog/SuddenObstacle-v0`` (see :func:`make_spin_vector`)."""
-    return make_spin_vector("NeuroCog/SuddenObstacle-v0", num_envs, **env_kwargs)
+    """Vector entry point of ``NeuroCog/SuddenObstacle-v1`` (see :func:`make_spin_vector`)."""
+    return make_spin_vector("NeuroCog/SuddenObstacle-v1", num_envs, **env_kwargs)
 
 
 def static_obstacle_vector(num_envs: int = 1, **env_kwargs) -> SpinVectorEnv:
-    """Vector entry point of ``NeuroCog/StaticObstacle-v0`` (see :func:`make_spin_vector`)."""
-    return make_spin_vector("NeuroCog/StaticObstacle-v0", num_envs, **env_kwargs)
+    """Vector entry point of ``NeuroCog/StaticObstacle-v1`` (see :func:`make_spin_vector`)."""
+    return make_spin_vector("NeuroCog/StaticObstacle-v1", num_envs, **env_kwargs)

@@ -1,9 +1,9 @@
-"""Walk-v0 benchmark: throughput beside Gymnasium's Ant-v5, and the default gait's statistics.
+"""Walk-v1 benchmark: throughput beside Gymnasium's Ant-v5, and the default gait's statistics.
 
 Three parts, printed as markdown tables and written to ``--out`` (``docs/benchmarks_walk.md``):
 
 1. Throughput, one process pinned to one core, timed interleaved in rounds (so load from other
-   processes falls on every row alike), medians over the rounds: ``NeuroCog/Walk-v0`` env steps/s
+   processes falls on every row alike), medians over the rounds: ``NeuroCog/Walk-v1`` env steps/s
    with zero actions (plain CPG walking) and with uniform random actions, Gymnasium's ``Ant-v5``
    with random actions, and raw ``mujoco.mj_step`` of both scenes.
 2. Gait statistics of the shipped default gait on flat ground: ``--seconds`` (60) per seed for
@@ -50,7 +50,7 @@ from benchlib import field_doc, machine  # noqa: E402
 import neurocog_gym  # noqa: F401  (registers the env ids)
 from neurocog_gym.robot.names import LEGS
 
-WALK = "NeuroCog/Walk-v0"
+WALK = "NeuroCog/Walk-v1"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -339,7 +339,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     command = "python scripts/bench_walk.py " + " ".join(sys.argv[1:] if argv is None else argv)
     report = [
-        "# Walk-v0 benchmark",
+        "# Walk-v1 benchmark",
         "",
         f"Command: `{command.strip()}`  ",
         f"Machine: {machine('mujoco', 'gymnasium', 'numpy', pinned=True)}  ",
@@ -352,8 +352,8 @@ def main(argv: list[str] | None = None) -> int:
         "",
         *speed_lines,
         "",
-        f"Walk-v0 (zero actions) runs at {ratio:.2f}x the env steps/s of Ant-v5 (target >= 0.5x). "
-        "One Walk-v0 step is 10 ms of simulated time (5 physics steps of 2 ms, the CPG and the "
+        f"Walk-v1 (zero actions) runs at {ratio:.2f}x the env steps/s of Ant-v5 (target >= 0.5x). "
+        "One Walk-v1 step is 10 ms of simulated time (5 physics steps of 2 ms, the CPG and the "
         "motor-neuron pools), one Ant-v5 step is 50 ms (5 physics steps of 10 ms).",
         "",
         "## 2. Default gait on flat ground",

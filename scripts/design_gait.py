@@ -36,7 +36,7 @@ neuron A to neuron B, positive in Eq. 5; HF/HE hip flexor/extensor, KF/KE knee f
 Numeric values: the structure above was fixed by hand (the knee-ahead ring chosen from a scan of
 the knee-hip phase of the isolated CPG over the intra-leg genes). The numbers in ``TrotDesign``
 were then refined by a local random search, single process, on flat ground in
-``NeuroCog/Walk-v0`` (zero action, 3-4 seeds of 8-10 s each, the first 2 s left out, the design
+``NeuroCog/Walk-v1`` (zero action, 3-4 seeds of 8-10 s each, the first 2 s left out, the design
 values perturbed one share at a time and kept when better). Its cost: speed error to 0.5 m/s;
 swing clearance of every leg (5th percentile of the per-swing peaks) below 2.6-2.8 cm or above
 5 cm; duty factor below 0.48; lateral drift and heading change; the per-stride yaw wobble and the

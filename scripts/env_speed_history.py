@@ -79,7 +79,7 @@ def main() -> None:
         "Ratios are within a run (Ant-v5 and one env in the same interleaved rounds). "
         "Regenerate with `python scripts/env_speed_history.py`.",
         "",
-        "| commit | date | CPU | SuddenObstacle-v0 steps/s | Ant-v5 steps/s | × Ant-v5 "
+        "| commit | date | CPU | SuddenObstacle steps/s | Ant-v5 steps/s | × Ant-v5 "
         "| make_vec 2 envs (SpinVectorEnv) × 1 env | AsyncVectorEnv × 1 env |",
         "|---|---|---|---:|---:|---:|---|---|",
     ]

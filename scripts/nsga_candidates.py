@@ -4,7 +4,7 @@ For every member of the final population (``history.jsonl``'s last generation) a
 Pareto front (``pareto.json``) of a run folder: the fast evaluator (``train/evaluate.py``) over
 ``--seconds`` on seed 0, then on ``--seeds`` seeds for those that pass a loose first cut
 (feasible, speed error <= 2 x tol, CoT below the reference gait's); then the few best in
-``NeuroCog/Walk-v0`` itself (zero action) for swing clearance and stepping frequency. Rules for a
+``NeuroCog/Walk-v1`` itself (zero action) for swing clearance and stepping frequency. Rules for a
 candidate (all seeds): |speed - 0.5| <= ``--speed-tol``, CoT below the reference (the shipped
 default, measured the same way), lateral drift <= ``--max-drift`` m per 10 m forward, no fall,
 median swing clearance (highest leg) < ``--max-clearance``. The best passing one (lowest mean
@@ -28,12 +28,12 @@ import numpy as np
 
 
 def env_stats(gait, seed: int, seconds: float, warmup: float = 2.0) -> dict:
-    """Roll out ``gait`` in Walk-v0 with a zero action; drift, heading, clearance, frequency."""
+    """Roll out ``gait`` in Walk-v1 with a zero action; drift, heading, clearance, frequency."""
     import gymnasium as gym
 
     import neurocog_gym  # noqa: F401
 
-    env = gym.make("NeuroCog/Walk-v0", gait=gait, max_episode_steps=-1)
+    env = gym.make("NeuroCog/Walk-v1", gait=gait, max_episode_steps=-1)
     env.reset(seed=seed)
     u = env.unwrapped
     d = u.data
@@ -89,7 +89,7 @@ def main(argv=None) -> int:
     ap.add_argument("--speed-tol", type=float, default=0.05)
     ap.add_argument("--max-drift", type=float, default=0.5)
     ap.add_argument("--max-clearance", type=float, default=0.06)
-    ap.add_argument("--env-check", type=int, default=6, help="best N checked in Walk-v0")
+    ap.add_argument("--env-check", type=int, default=6, help="best N checked in Walk-v1")
     ns = ap.parse_args(argv)
 
     from neurocog_gym import io as nio

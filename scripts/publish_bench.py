@@ -32,7 +32,7 @@ def main() -> None:
     md = [
         "## Obstacle benchmark (Table 4, Table 5)",
         "",
-        "Simulated trials of `NeuroCog/SuddenObstacle-v0` and `NeuroCog/StaticObstacle-v0` "
+        "Simulated trials of `NeuroCog/SuddenObstacle-v1` and `NeuroCog/StaticObstacle-v1` "
         "(outcomes do not depend on the machine's load). Full report with plots: "
         f"[{report}]({Path(report).relative_to('docs')}).",
         "",

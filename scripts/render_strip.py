@@ -1,6 +1,6 @@
 """A picture strip of the AEF (or the avoid reflex, or the shipped PPO policy) on a sudden block.
 
-One seeded ``NeuroCog/SuddenObstacle-v0`` episode under ``--policy aef`` (the AEF network on the
+One seeded ``NeuroCog/SuddenObstacle-v1`` episode under ``--policy aef`` (the AEF network on the
 observation; its stop / side-step / pass comes from the effectivity's provision teacher,
 ``locomotion/avoidance.py``) or ``--policy avoid`` (the interrupt-driven reflex), rendered with
 the attention graph, facets and footholds drawn in; four frames side by side: trotting just
@@ -40,7 +40,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--out", default="docs/img/aef_sudden_strip.png", help="PNG to write")
     args = ap.parse_args(argv)
     env = gym.make(
-        "NeuroCog/SuddenObstacle-v0",
+        "NeuroCog/SuddenObstacle-v1",
         render_mode="rgb_array",
         width=args.width,
         height=args.height,

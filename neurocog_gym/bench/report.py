@@ -81,7 +81,7 @@ def run_label(config: dict) -> str:
         "aef-provision": "AEF provision only",
         "blind": "blind",
         "avoid": "avoid reflex + AEF provision",
-        "ppo": "PPO (shipped)",
+        "ppo": "PPO (shipped, v0 envs)",  # trained and benched on v0; v1 refuses it
     }
     if policy not in names:
         policy = Path(policy).stem
@@ -342,7 +342,7 @@ def write_report(
     md += [
         "Our trials in simulation (MuJoCo) beside the paper's. **The paper's counts come from a "
         "real robot** (50 trials per scenario, objects placed by hand); ours from the "
-        "`NeuroCog/SuddenObstacle-v0` and `NeuroCog/StaticObstacle-v0` envs, so the comparison "
+        "`NeuroCog/SuddenObstacle-v1` and `NeuroCog/StaticObstacle-v1` envs, so the comparison "
         "is of the method, not of the numbers' conditions.",
         "",
         "Runs:",

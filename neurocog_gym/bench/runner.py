@@ -46,8 +46,8 @@ from neurocog_gym import io
 from neurocog_gym.bench.outcome import PAPER_TABLE4, SCENARIOS, scenario_summary
 
 ENV_IDS: dict[str, str] = {
-    "sudden": "NeuroCog/SuddenObstacle-v0",
-    "static": "NeuroCog/StaticObstacle-v0",
+    "sudden": "NeuroCog/SuddenObstacle-v1",
+    "static": "NeuroCog/StaticObstacle-v1",
 }
 CONTROL_DT = 0.01
 """s, the envs' control cycle (SPEC §9)."""

@@ -1,6 +1,6 @@
 """ObstacleEnv: QuadrupedEnv plus the eyes, the attention loop, the effectivity and the outcome.
 
-Shared by ``NeuroCog/SuddenObstacle-v0`` and ``NeuroCog/StaticObstacle-v0``. Every control cycle:
+Shared by ``NeuroCog/SuddenObstacle-v1`` and ``NeuroCog/StaticObstacle-v1``. Every control cycle:
 the physics steps; the four ToF sensors cast a frame when one is due (their frame rate); the
 attention pipeline runs one DD-GNG learning cycle on the latest frame and detects affordances;
 the effectivity predicts footholds and swing paths against the perceived obstacle boxes.
@@ -95,16 +95,18 @@ class ObstacleEnv(QuadrupedEnv):
     def _observation_spaces(self) -> dict[str, spaces.Space]:
         s = super()._observation_spaces()
         f32 = np.float32
-        s["objects"] = spaces.Box(-np.inf, np.inf, (N_OBJECTS, len(OBJECT_FIELDS)), f32)
+        # Every key 1-D (SB3's check_env and its MultiInputPolicy take vectors or images): the
+        # tables are flattened row by row; ``obs[k].reshape(N_OBJECTS, len(OBJECT_FIELDS))``.
+        s["objects"] = spaces.Box(-np.inf, np.inf, (N_OBJECTS * len(OBJECT_FIELDS),), f32)
         s["objects_mask"] = spaces.Box(0.0, 1.0, (N_OBJECTS,), f32)
         s["aef_input"] = spaces.Box(-np.inf, np.inf, (AEF_INPUTS,), f32)
         s["aef_mode"] = spaces.Discrete(3)
-        s["foothold"] = spaces.Box(-np.inf, np.inf, (4, 3), f32)
+        s["foothold"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
         s["foothold_safe"] = spaces.MultiBinary(4)
         if self.include_graph:
-            s["graph_nodes"] = spaces.Box(-np.inf, np.inf, (self.graph_max_nodes, 3), f32)
+            s["graph_nodes"] = spaces.Box(-np.inf, np.inf, (self.graph_max_nodes * 3,), f32)
             s["graph_edges"] = spaces.Box(
-                -1, self.graph_max_nodes, (self.graph_max_edges, 2), np.int64
+                -1, self.graph_max_nodes, (self.graph_max_edges * 2,), np.int64
             )
             s["graph_counts"] = spaces.Box(
                 0, max(self.graph_max_nodes, self.graph_max_edges), (2,), np.int64
@@ -306,17 +308,17 @@ class ObstacleEnv(QuadrupedEnv):
         aef[15:27] = obs["joint_pos"]
         aef[27:31] = obs["touch"]
         obs.update(
-            objects=objects,
+            objects=objects.ravel(),
             objects_mask=mask,
             aef_input=aef,
             aef_mode=mode,
-            foothold=foothold.astype(np.float32),
+            foothold=foothold.astype(np.float32).ravel(),
             foothold_safe=safe,
         )
         if self.include_graph:
             g = self.pipeline.net.padded(self.graph_max_nodes, self.graph_max_edges)
-            obs["graph_nodes"] = g.nodes.astype(np.float32)
-            obs["graph_edges"] = g.edges.astype(np.int64)
+            obs["graph_nodes"] = g.nodes.astype(np.float32).ravel()
+            obs["graph_edges"] = g.edges.astype(np.int64).ravel()
             obs["graph_counts"] = np.array([g.n_nodes, g.n_edges], np.int64)
         return obs
 

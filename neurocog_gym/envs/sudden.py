@@ -1,4 +1,4 @@
-"""NeuroCog/SuddenObstacle-v0: a wooden block appears in a front leg's swing path (§6.5.1)."""
+"""NeuroCog/SuddenObstacle-v1: a wooden block appears in a front leg's swing path (§6.5.1)."""
 
 from __future__ import annotations
 
@@ -17,41 +17,54 @@ class SuddenObstacleEnv(ObstacleEnv):
 
     §6.5.1: "During the swinging phase (front leg lifted), some pieces of wood are moved and
     placed by hand immediately in front of the robot", at random positions and arrangements.
-    Here, after a random ``appear_after`` time (uniform in ``appear_window``), at the next
-    lift-off of a front leg (its sole unloads while the CPG is in that leg's swing phase), one
-    block (or, with probability ``pair_probability``, two blocks side
-    by side) is placed across that leg's swing path: the block's near face lies between the foot
-    and its predicted foothold, so an unchanged swing runs into it or lands on it. Heights are the
-    paper's 6, 7, 8 cm with ±5 mm jitter; lengths 5-12 cm along the path, widths 10-30 cm.
-    The blocks are placed in front of the robot, never into it: a placement that comes closer
-    than ``min_gap`` to a robot geom (the other front leg often stands where a wide block would
-    go) is drawn again, up to ``placement_tries`` times, and if none fits, the block appears at
-    the next front-leg lift-off instead.
+    Here, after a random ``appear_after`` time (uniform in ``appear_window``), the next
+    lift-off of a front leg (its sole unloads while the CPG is in that leg's swing phase) starts
+    the clock; ``appear_delay`` (0.1 s) later, while that foot is still in the air, one block
+    (or, with probability ``pair_probability``, two blocks side by side) appears in the area of
+    the leg's next foothold — the effectivity's predicted foothold, as the policy observes it:
+    the block's near face lies between the foot (plus its sole radius and ``min_gap``) and the
+    foothold, and the foothold lies inside the block's footprint or at most a sole radius short
+    of its near face, so an unchanged swing lands on the block or runs into it. A swing that
+    touches down before ``appear_delay`` (a flickering contact, not a step) gets no block; the
+    next lift-off starts the clock again. ``info["appear_swing_phase"]`` is the seconds since
+    that leg's lift-off at the appearance. Heights are the paper's 6, 7, 8 cm with ±5 mm jitter;
+    lengths 5-12 cm along the path, widths 10-30 cm. The blocks are placed in front of the
+    robot, never into it: a placement that comes closer than ``min_gap`` to a robot geom (the
+    other front leg often stands where a wide block would go) is drawn again, up to
+    ``placement_tries`` times, and if none fits, the block appears in the next front swing
+    instead.
 
     Every episode gets its block: if no front lift-off has come ``appear_deadline`` s after
     ``appear_after`` (an agent can keep the front soles loaded or hold a swing back — a PPO
     policy learned to, and walked 7 s without ever meeting a block), the block appears then,
     across the path of the front leg the CPG swings (or, if it swings neither, of the less loaded
-    one), and ``info["appear_forced"]`` is True. The CPG's trot lifts a front foot every ~0.23 s,
-    so the default 1 s never fires under the blind, AEF or avoid controllers.
+    one), in the area of its predicted foothold (a nominal swing from now if the effectivity
+    sees no swing), and ``info["appear_forced"]`` is True. A lift-off whose ``appear_delay`` is
+    running when the deadline comes is waited for. The CPG's trot lifts a front foot every
+    ~0.23 s, so the default 1 s never fires under the blind, AEF or avoid controllers.
 
     ## Action space, observation space
 
-    As ``NeuroCog/Walk-v0`` (15-value AEF output layer), plus these observation keys:
+    As ``NeuroCog/Walk-v1`` (15-value AEF output layer), plus these observation keys. Every
+    key is 1-D (tables are flattened row by row; ``reshape`` gives them back), so
+    stable-baselines3's ``check_env`` is silent and its ``MultiInputPolicy`` takes them as they
+    are:
 
     | key | shape | meaning |
     |---|---|---|
-    | objects | (4, 8) | the 4 nearest perceived objects ahead: offset from the torso in its yaw frame (3), height, width, length, gamma, density |
+    | objects | (32,) | the 4 nearest perceived objects ahead, 8 values each (``reshape(4, 8)``): offset from the torso in its yaw frame (3), height, width, length, gamma, density |
     | objects_mask | (4,) | 1 for a valid row |
     | aef_input | (31,) | the AEF's inputs (Fig. 7): A_h, A_w, A_s, 4 x 3 interrupt directions (in mode 2 each leg's slot holds the effectivity's provision s_SAG, s_COR, s_DIR), 12 joint angles, 4 touch |
     | aef_mode | () | 0 nothing to do, 1 a swing must change (interrupt group), 2 change the walk (provision group): walk round an obstacle ahead, or stop, side-step and pass a block that appeared within reach |
-    | foothold | (4, 3) | predicted footholds relative to the torso, yaw frame, m |
+    | foothold | (12,) | predicted footholds relative to the torso, yaw frame, m: x, y, z of each leg (``reshape(4, 3)``) |
     | foothold_safe | (4,) | 1 if that foothold and swing path are clear of perceived obstacles |
-    | graph_nodes, graph_edges, graph_counts | padded | the DD-GNG graph (``include_graph=True`` only) |
+    | graph_nodes | (3 graph_max_nodes,) | the DD-GNG graph's node positions, padded with 0 (``reshape(-1, 3)``; ``include_graph=True`` only) |
+    | graph_edges | (2 graph_max_edges,) | its edges as node index pairs, padded with -1 (``reshape(-1, 2)``) |
+    | graph_counts | (2,) | the valid nodes and edges |
 
     ## Rewards
 
-    As ``NeuroCog/Walk-v0``, plus ``reward_touch`` = -``touch_cost`` (default 1) on each new
+    As ``NeuroCog/Walk-v1``, plus ``reward_touch`` = -``touch_cost`` (default 1) on each new
     contact with an obstacle and
     ``reward_pass`` = +100 when the robot passes (the episode ends there; 100 = 1 / (1 - 0.99)
     stands in for the walk that would follow, see ``_reward``).
@@ -64,7 +77,8 @@ class SuddenObstacleEnv(ObstacleEnv):
 
     ## Arguments
 
-    As ``WalkEnv``, plus ``appear_window`` (s, default (1.0, 2.0)), ``appear_deadline`` (s, 1.0),
+    As ``WalkEnv``, plus ``appear_window`` (s, default (1.0, 2.0)), ``appear_delay`` (s, 0.1:
+    from a front lift-off to the block's appearance, §6.2), ``appear_deadline`` (s, 1.0),
     ``pair_probability`` (0.3),
     ``min_gap`` (m, 0.01: closest a new block may come to the robot), ``placement_tries`` (5),
     ``touch_cost`` (1.0: the reward lost per new contact with a block; with the pass bonus of 100
@@ -76,6 +90,7 @@ class SuddenObstacleEnv(ObstacleEnv):
     def __init__(
         self,
         appear_window: tuple[float, float] = (1.0, 2.0),
+        appear_delay: float = 0.1,
         appear_deadline: float = 1.0,
         pair_probability: float = 0.3,
         min_gap: float = 0.01,
@@ -91,6 +106,8 @@ class SuddenObstacleEnv(ObstacleEnv):
             raise ValueError(
                 f"appear_window must be (lo, hi) with 0 <= lo <= hi, got {appear_window}"
             )
+        if not (math.isfinite(appear_delay) and appear_delay >= 0.0):
+            raise ValueError(f"appear_delay must be a finite number >= 0 s, got {appear_delay}")
         if not appear_deadline >= 0.0:
             raise ValueError(f"appear_deadline must be >= 0 s, got {appear_deadline}")
         if not 0.0 <= pair_probability <= 1.0:
@@ -100,6 +117,7 @@ class SuddenObstacleEnv(ObstacleEnv):
         if int(placement_tries) < 1:
             raise ValueError(f"placement_tries must be >= 1, got {placement_tries}")
         self.appear_window = (float(lo), float(hi))
+        self.appear_delay = float(appear_delay)
         self.appear_deadline = float(appear_deadline)
         self.pair_probability = float(pair_probability)
         self.min_gap = float(min_gap)
@@ -108,7 +126,8 @@ class SuddenObstacleEnv(ObstacleEnv):
         from gymnasium.utils import EzPickle
 
         EzPickle.__init__(
-            self, appear_window=appear_window, appear_deadline=appear_deadline,
+            self, appear_window=appear_window, appear_delay=appear_delay,
+            appear_deadline=appear_deadline,
             pair_probability=pair_probability,
             min_gap=min_gap, placement_tries=placement_tries, touch_cost=touch_cost,
             **self._ezpickle_kwargs,
@@ -119,64 +138,108 @@ class SuddenObstacleEnv(ObstacleEnv):
         self.appeared_at = None
         self.appear_leg = -1
         self.appear_forced = False
+        self.appear_swing_phase = None
+        self.appear_foothold = None
         self.rejected_swings = 0
         self._front_down = np.ones(2, dtype=bool)
+        # Last lift-off of each front leg (s), NaN while it is on the ground; and which of them
+        # (index into FRONT_LEGS) has its appear_delay running, -1 for none.
+        self._lift_at = np.full(2, np.nan)
+        self._pending = -1
 
     def _task_event(self) -> None:
         if self.appeared_at is not None:
             return  # one sudden obstacle per episode
+        front = list(FRONT_LEGS)
         touch = self._touch_now  # read at the start of this cycle's _after_physics
-        down = touch[list(FRONT_LEGS)] > self.effectivity.p.touch_off
+        down = touch[front] > self.effectivity.p.touch_off
         # A lift-off is the sole unloading while the CPG swings that leg: the touch signal alone
         # also drops for a cycle in mid-stance (a planted foot's contact flickers), and half of
         # such drops were not followed by a lift (measured: 51 % of bare touch drops, 95 % of
         # drops in the CPG's swing phase, lift the foot > 3 cm within 0.08 s).
-        swinging = self.generator.swinging[list(FRONT_LEGS)]
+        swinging = self.generator.swinging[front]
         lifted = self._front_down & ~down & swinging
         self._front_down = down
-        if self.data.time < self.appear_after:
+        t = float(self.data.time)
+        self._lift_at[lifted] = t
+        self._lift_at[down] = np.nan  # on the ground: that swing is over
+        if t < self.appear_after:
             return
-        if lifted.any():
-            leg = FRONT_LEGS[int(np.flatnonzero(lifted)[0])]
+        if self._pending >= 0 and np.isnan(self._lift_at[self._pending]):
+            self._pending = -1  # it touched down within appear_delay: no swing to meet
+        if self._pending < 0 and lifted.any():
+            self._pending = int(np.flatnonzero(lifted)[0])
+        if self._pending >= 0:
+            # §6.2: the block appears about 0.1 s after the front leg's swing starts. (The 1e-9
+            # absorbs the rounding of a time summed from physics steps.)
+            if t - self._lift_at[self._pending] < self.appear_delay - 1e-9:
+                return
+            leg = FRONT_LEGS[self._pending]
+            self._pending = -1
             forced = False
-        elif self.data.time >= self.appear_after + self.appear_deadline:
+        elif t >= self.appear_after + self.appear_deadline:
             # No lift-off by the deadline: the block appears anyway, before the leg the CPG
             # swings, else before the less loaded front leg.
             if swinging.any():
                 leg = FRONT_LEGS[int(np.flatnonzero(swinging)[0])]
             else:
-                leg = FRONT_LEGS[int(np.argmin(touch[list(FRONT_LEGS)]))]
+                leg = FRONT_LEGS[int(np.argmin(touch[front]))]
             forced = True
         else:
             return
+        lift = self._lift_at[front.index(leg)]
         for _ in range(self.placement_tries):
             for b in self._draw_blocks(leg):
                 self.pool.add(self.model, self.data, b)
             if self._gap_to_robot() >= self.min_gap:
-                self.appeared_at = float(self.data.time)
+                self.appeared_at = t
                 self.appear_leg = int(leg)
                 self.appear_forced = forced
+                self.appear_swing_phase = None if np.isnan(lift) else round(t - float(lift), 6)
                 return
             # Placed by hand in front of the robot, never into it: take the blocks away again.
             self.pool.place(self.model, self.data, [])
+        self.appear_foothold = None
         self.rejected_swings += 1  # no free spot in this swing's path: wait for the next one
 
+    def _next_foothold(self, leg: int, heading: np.ndarray) -> np.ndarray:
+        """(2,) world x, y where ``leg``'s swing will land: the effectivity's prediction.
+
+        The prediction of the last control cycle, the one the policy observed (``foothold``); a
+        leg the effectivity does not see swinging (a forced placement) gets a nominal swing
+        from now, the effectivity's rule with the whole swing time left.
+        """
+        eff = self.eff
+        if eff is not None and eff.swinging[leg]:
+            return eff.foothold[leg, :2].copy()
+        p = self.effectivity.p
+        hip = self.data.xpos[self.robot.hip_body[leg], :2]
+        return hip + p.reach * heading + self.data.qvel[0:2] * p.swing_time
+
     def _draw_blocks(self, leg: int) -> list[Block]:
-        """The block (and maybe its neighbour) across the swing path of ``leg``."""
+        """The block (and maybe its neighbour) over the next foothold of ``leg``.
+
+        Along the heading, measured from the foot: the foothold is ``span`` ahead; the near face
+        is drawn uniformly in ``[max(gap, span - length), max(that, span + r)]`` (``r`` the sole
+        radius, ``gap`` = r + ``min_gap``), so the foothold lies inside the footprint or at most
+        r short of the near face; across, the block is centred within ±3 cm of the foothold
+        (its width is at least 10 cm).
+        """
         rng = self.np_random
         p = self.effectivity.p
         yaw = self._yaw()
         heading = np.array([np.cos(yaw), np.sin(yaw)])
-        hip = self.data.xpos[self.robot.hip_body[leg], :2]
+        across = np.array([-heading[1], heading[0]])
         foot = self._feet()[leg, :2]
-        v = self.data.qvel[0:2]
-        foothold = hip + p.reach * heading + v * p.swing_time
+        foothold = self._next_foothold(leg, heading)
+        self.appear_foothold = foothold
         block = random_block(rng, 0.0, 0.0, yaw_range=0.25)
-        # Near face between the foot and the foothold: the swing meets the block.
         span = float((foothold - foot) @ heading)
-        near = float(rng.uniform(0.45, 0.85)) * max(span, 0.05)
-        centre = foot + (near + block.length / 2) * heading
-        centre += float(rng.uniform(-0.03, 0.03)) * np.array([-heading[1], heading[0]])
+        r = p.foot_radius
+        lo = max(r + self.min_gap, span - block.length)
+        near = float(rng.uniform(lo, max(lo, span + r)))
+        lateral = float((foothold - foot) @ across) + float(rng.uniform(-0.03, 0.03))
+        centre = foot + (near + block.length / 2) * heading + lateral * across
         blocks = [
             Block(centre[0], centre[1], block.length, block.width, block.height, yaw + block.yaw)
         ]
@@ -205,6 +268,7 @@ class SuddenObstacleEnv(ObstacleEnv):
         out["appeared_at"] = self.appeared_at
         out["appear_leg"] = self.appear_leg
         out["appear_forced"] = self.appear_forced
+        out["appear_swing_phase"] = self.appear_swing_phase
         out["rejected_swings"] = self.rejected_swings
         return out
 

@@ -2,7 +2,7 @@
 
 The evaluator steps the MuJoCo model with the :class:`LocomotionGenerator`'s state and kernels
 directly (one fused numba call per cycle, ``_eval_kernels.py``) — no perception, no Gymnasium
-wrappers — and reproduces ``NeuroCog/Walk-v0`` with an all-zero action step for step: same scene,
+wrappers — and reproduces ``NeuroCog/Walk-v1`` with an all-zero action step for step: same scene,
 same reset (the ``home`` keyframe plus uniform joint noise, then the CPG's trot-phase start with
 its own noise, both drawn from ``numpy.random.default_rng(seed)`` in the env's order), same fall
 and physics-fault tests. The one difference: a diverging CPG ends the rollout (below), where the

@@ -14,7 +14,7 @@ class _DictEnv(gym.Env):
     observation_space = spaces.Dict(
         {
             "joint_vel": spaces.Box(-np.inf, np.inf, (12,), np.float32),
-            "objects": spaces.Box(-np.inf, np.inf, (4, 8), np.float32),
+            "objects": spaces.Box(-np.inf, np.inf, (32,), np.float32),
             "aef_mode": spaces.Discrete(3),
         }
     )
@@ -31,7 +31,7 @@ class _DictEnv(gym.Env):
 def _obs(rng):
     return {
         "joint_vel": rng.normal(40.0, 5.0, 12).astype(np.float32),
-        "objects": rng.normal(-3.0, 1.0, (4, 8)).astype(np.float32),
+        "objects": rng.normal(-3.0, 1.0, 32).astype(np.float32),
         "aef_mode": np.int64(2),
     }
 
@@ -111,25 +111,28 @@ def test_sb3_policy_explicit_statistics(saved, tmp_path):
         SB3Policy(out / "model.zip", vecnormalize=tmp_path / "bad.pkl")
 
 
-def test_shipped_ppo_policy_acts_on_the_obstacle_env():
-    """``make_policy("ppo")``: the shipped model and its statistics, on its training env."""
-    import json
+def test_shipped_ppo_policy_says_it_needs_retraining_on_v1(capsys, tmp_path):
+    """The shipped model was trained on SuddenObstacle-v0 (another body, 2-D observation keys):
+    ``make_policy("ppo")`` and ``--policy ppo`` stop with one line that says so, instead of an
+    observation-shape error from deep inside stable-baselines3 at the first step."""
+    import neurocog_gym
+    from neurocog_gym import cli
+    from neurocog_gym.policies import shipped_ppo_env
 
-    from neurocog_gym import paths
+    assert shipped_ppo_env() == "NeuroCog/SuddenObstacle-v0"
+    assert shipped_ppo_env() not in neurocog_gym.ENV_IDS
+    with pytest.raises(
+        ValueError, match=r"trained on the v0 envs .* retrained on .*-v1 \(issue 24\)"
+    ):
+        make_policy("ppo")
+    assert cli.main(["bench", "--policy", "ppo", "--trials", "1", "--workers", "1",
+                     "--out", str(tmp_path / "bench")]) == 2  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "retrained" in err and "issue 24" in err
+    assert not (tmp_path / "bench" / "trials.jsonl").exists()
 
-    policy = make_policy("ppo")
-    assert policy.name == "ppo" and policy.obs_normalizer is not None
-    args = json.loads((paths.asset("ppo_sudden") / "args.json").read_text())
-    assert args["env_id"] == "NeuroCog/SuddenObstacle-v0"
-    env = gym.make(args["env_id"])
-    obs, _ = env.reset(seed=0)
-    for _ in range(5):
-        action = policy(obs)
-        assert action.shape == (15,) and action.dtype == np.float32
-        assert env.action_space.contains(action)
-        assert np.array_equal(action, policy(obs))  # deterministic
-        obs, *_ = env.step(action)
-    # The statistics are the ones it was trained with, not identity: normalising moves obs.
-    norm = policy.obs_normalizer.normalize_obs(obs)
-    assert not np.allclose(norm["joint_pos"], obs["joint_pos"])
-    env.close()
+
+def test_a_model_of_ones_own_still_loads_by_path(saved):
+    """Only the name ``ppo`` is refused; a path is an :class:`SB3Policy`, whatever env it knew."""
+    out, _, _ = saved
+    assert isinstance(make_policy(str(out / "model.zip")), SB3Policy)

@@ -7,8 +7,8 @@ import neurocog_gym  # noqa: F401
 from neurocog_gym.perception.pipeline import PipelineParams
 from neurocog_gym.robot.obstacles import Block
 
-SUDDEN = "NeuroCog/SuddenObstacle-v0"
-STATIC = "NeuroCog/StaticObstacle-v0"
+SUDDEN = "NeuroCog/SuddenObstacle-v1"
+STATIC = "NeuroCog/StaticObstacle-v1"
 
 
 def _walk_until(env, cond, max_steps=700):
@@ -20,44 +20,89 @@ def _walk_until(env, cond, max_steps=700):
     return obs, info, term, trunc
 
 
-def test_sudden_obstacle_appears_in_the_swing_path_of_a_front_leg():
+def _blind_until_the_block(env, seed):
+    """Zero actions (the blind policy) until the sudden block appears.
+
+    Returns the last info, each front leg's last lift-off seen from the observation (its touch
+    drops below ``touch_off`` while the CPG swings it) and the effectivity's predicted footholds
+    of the cycle before the appearance ((4, 3), world) — what the policy saw.
+    """
+    u = env.unwrapped
+    obs, _ = env.reset(seed=seed)
+    off = u.effectivity.p.touch_off
+    lift, was_down, foothold, info = {}, {0: True, 1: True}, None, {}
+    for _ in range(700):
+        foothold = u.eff.foothold.copy()
+        obs, _, term, trunc, info = env.step(np.zeros(15, np.float32))
+        for leg in (0, 1):
+            down = obs["touch"][leg] > off
+            if was_down[leg] and not down and u.generator.swinging[leg]:
+                lift[leg] = u.data.time
+            was_down[leg] = down
+        if u.appeared_at is not None or term or trunc:
+            break
+    return info, lift, foothold
+
+
+def test_sudden_obstacle_appears_a_tenth_of_a_second_into_a_front_swing():
+    """§6.2: the block appears about 0.1 s after a front leg's swing starts: appear_delay after
+    the lift-off, within one control cycle, with that foot still in the air."""
     env = gym.make(SUDDEN)
-    for seed in range(3):
-        env.reset(seed=seed)
-        u = env.unwrapped
-        _walk_until(env, lambda i, u=u: u.appeared_at is not None)
+    u = env.unwrapped
+    for seed in range(6):
+        info, lift, _ = _blind_until_the_block(env, seed)
         assert u.appeared_at is not None and 1.0 <= u.appeared_at <= 2.5
         assert not u.appear_forced  # a real lift-off, well before the deadline
         leg = u.appear_leg
-        assert leg in (0, 1)
-        # At appearance the leg had just lifted off; its foot is behind the block's near face
-        # and the block lies ahead of it within one stride.
-        foot = u.data.site_xpos[u.robot.foot_site[leg]]
-        box = u.pool.boxes()[0]
-        assert box[0, 0] > foot[0] - 0.02
-        assert box[0, 0] < foot[0] + 0.25
-        assert box[0, 1] - 0.05 < foot[1] < box[1, 1] + 0.05
-        assert 0.055 <= box[1, 2] <= 0.085
+        assert leg in (0, 1) and leg in lift
+        assert abs(u.appeared_at - lift[leg] - 0.1) <= 0.01 + 1e-9
+        assert info["appear_swing_phase"] == pytest.approx(u.appeared_at - lift[leg], abs=1e-6)
+        assert info["obstacles"] and 0.055 <= u.pool.boxes()[0, 1, 2] <= 0.085
+        assert u.touch()[leg] <= u.effectivity.p.touch_off  # mid-swing: the foot is up
+        assert u.data.site_xpos[u.robot.foot_site[leg], 2] > 0.02
 
 
-def test_sudden_obstacle_appears_as_the_leg_swings():
-    """The block appears at a real lift-off: the CPG is in that leg's swing phase and its foot
-    rises within 0.08 s. (Triggered by the touch signal alone, 25 of 40 blocks appeared on a
-    foot that stayed planted: its contact flickers in mid-stance.)"""
+def test_sudden_obstacle_covers_the_swing_legs_predicted_foothold():
+    """The block lies over the effectivity's predicted foothold of the swinging leg (the one
+    the policy observed): inside its footprint, or at most a sole radius before its near face,
+    with the foot behind that face — an unchanged swing lands on it or runs into it."""
     env = gym.make(SUDDEN)
     u = env.unwrapped
-    lifted = []
-    for seed in range(100, 112):
-        env.reset(seed=seed)
-        _walk_until(env, lambda i: u.appeared_at is not None)
+    r = u.effectivity.p.foot_radius
+    for seed in range(20, 30):
+        _, _, foothold = _blind_until_the_block(env, seed)
         leg = u.appear_leg
-        assert u.generator.swinging[leg]
-        z = []
-        for _ in range(8):
-            env.step(np.zeros(15, np.float32))
-            z.append(u.data.site_xpos[u.robot.foot_site[leg], 2])
-        lifted.append(max(z) > 0.03)
-    assert np.mean(lifted) >= 0.75
+        b = u.pool.blocks[0]
+        c, s = np.cos(b.yaw), np.sin(b.yaw)
+
+        def local(xy, b=b, c=c, s=s):  # world x, y -> the block's frame (x along its length)
+            d = np.asarray(xy[:2]) - (b.x, b.y)
+            return c * d[0] + s * d[1], -s * d[0] + c * d[1]
+
+        along, across = local(foothold[leg])
+        assert -b.length / 2 - r - 1e-9 <= along <= b.length / 2, (seed, along, b.length)
+        assert abs(across) <= b.width / 2, (seed, across, b.width)
+        np.testing.assert_allclose(u.appear_foothold, foothold[leg, :2])
+        foot_along, _ = local(u.data.site_xpos[u.robot.foot_site[leg]])
+        assert foot_along < -b.length / 2  # the foot is still behind the near face
+
+
+def test_appear_delay_is_an_argument():
+    """appear_delay 0 puts the block down at the lift-off itself; a bad value is refused; the
+    value survives pickling (the vector envs' workers rebuild the env from it)."""
+    import pickle
+
+    env = gym.make(SUDDEN, appear_delay=0.0)
+    info, lift, _ = _blind_until_the_block(env, 3)
+    u = env.unwrapped
+    assert u.appeared_at == pytest.approx(lift[u.appear_leg]) and info["appear_swing_phase"] == 0
+    assert (
+        pickle.loads(pickle.dumps(gym.make(SUDDEN, appear_delay=0.05).unwrapped)).appear_delay
+        == 0.05
+    )
+    for bad in (-0.1, float("nan")):
+        with pytest.raises(ValueError, match="appear_delay"):
+            gym.make(SUDDEN, appear_delay=bad)
 
 
 def test_sudden_obstacle_appears_by_the_deadline_without_a_lift_off():
@@ -167,7 +212,7 @@ def test_env_pipeline_drops_the_raw_point_additions_it_never_reads(noise):
 
     tof = ToFParams(backend="numba", noise_std_rel=noise)
     given = PipelineParams(gng="gng", refine_noise=True, view_wall_width=0.3)
-    env = gym.make("NeuroCog/StaticObstacle-v0", tof=tof, perception=given)
+    env = gym.make("NeuroCog/StaticObstacle-v1", tof=tof, perception=given)
     p = env.unwrapped.pipeline.params
     assert p.view_wall_width == 0.0  # no walls in the scene; wall labels reach nothing
     assert p.refine_noise is (noise > 0)  # a noise-free frame has no noise to take out
@@ -194,8 +239,15 @@ def test_graph_in_observation_behind_a_flag():
     env = gym.make(SUDDEN, include_graph=True, graph_max_nodes=256, graph_max_edges=1024)
     obs, _ = env.reset(seed=0)
     n, m = obs["graph_counts"]
-    assert 0 < n <= 256 and obs["graph_nodes"].shape == (256, 3)
-    assert np.all(obs["graph_edges"][:m] < n) and np.all(obs["graph_edges"][m:] == -1)
+    # 1-D keys, row-major: node i is graph_nodes[3 i : 3 i + 3], edge j graph_edges[2 j : 2 j + 2]
+    assert 0 < n <= 256 and obs["graph_nodes"].shape == (256 * 3,)
+    assert obs["graph_edges"].shape == (1024 * 2,)
+    nodes, edges = obs["graph_nodes"].reshape(-1, 3), obs["graph_edges"].reshape(-1, 2)
+    g = env.unwrapped.pipeline.net.padded(256, 1024)  # the (rows, 3) and (rows, 2) tables
+    np.testing.assert_array_equal(nodes, g.nodes.astype(np.float32))
+    np.testing.assert_array_equal(edges, g.edges)
+    assert np.all(nodes[n:] == 0)
+    assert np.all(edges[:m] < n) and np.all(edges[:m] >= 0) and np.all(edges[m:] == -1)
     assert "graph_nodes" not in gym.make(SUDDEN).reset(seed=0)[0]
 
 
