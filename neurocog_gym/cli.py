@@ -266,8 +266,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run seed (trial seeds derive from seed, scenario, i)")  # fmt: skip
     p.add_argument("--policy", default="aef",
                    help="aef, aef-provision (interrupts off), blind, avoid (back-off and "
-                        "side-step reflex + aef-provision), ppo (the shipped PPO policy), AEF "
-                        "weights (.npz) or a stable-baselines3 model (.zip)")  # fmt: skip
+                        "side-step reflex + aef-provision), ppo (the shipped PPO policy: "
+                        "trained on v0, refused until retrained on v1), AEF weights (.npz) or "
+                        "a stable-baselines3 model (.zip)")  # fmt: skip
     p.add_argument("--attention", choices=("on", "off"), default="on",
                    help="off: plain GNG instead of DD-GNG attention (the ablation)")  # fmt: skip
     p.add_argument("--max-seconds", type=_positive_float, default=None,
@@ -293,7 +294,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="registered env id (see neurocog info)")  # fmt: skip
     p.add_argument("--policy", default="aef",
                    help="aef, aef-provision (interrupts off), blind, avoid, ppo (the shipped "
-                        "PPO policy), AEF weights (.npz) or a stable-baselines3 model (.zip); "
+                        "PPO policy: trained on v0, refused until retrained on v1), AEF "
+                        "weights (.npz) or a stable-baselines3 model (.zip); "
                         "Walk-v1 takes blind or a model trained on it")  # fmt: skip
     p.add_argument("--seconds", type=_positive_float, default=7.0,
                    help="simulated seconds (the episode may end sooner: fell or passed)",
