@@ -1,11 +1,21 @@
 """Trial outcomes: the tally of Table 4, Wilson intervals, and the Table 5 failure analysis.
 
-Outcome classes (§6.5, SPEC §8; defined from MuJoCo contacts and positions in
-:mod:`neurocog_gym.envs.obstacle`):
+Outcome classes v1 (§6.5, SPEC §8; defined exactly, from MuJoCo contacts and poses, in
+:mod:`neurocog_gym.envs.obstacle`, thresholds in
+:class:`~neurocog_gym.envs.obstacle.OutcomeParams`):
 
-* ``success``: passed the obstacles and never touched them ("obstacle totally avoided").
-* ``touch``: passed and touched them ("avoided but touched").
-* ``fail``: fell, the physics became unstable, or not passed when the time limit ran out.
+* ``success``: passed the blocks and no robot geom ever touched one ("obstacle totally
+  avoided").
+* ``touch``: passed, touched, but never stood on a block and never knocked one ("avoided but
+  touched").
+* ``fail``: knocked a block (its centre moved more than 2 cm horizontally, or it turned more
+  than 10° about any axis, from where it was placed), stood on a block (robot contacts on its
+  top face, normal within 30° of up, carried at least 10 % of the robot's weight for 3 control
+  cycles in a row), fell, the physics became unstable, or not passed when the time limit ran
+  out. Climbing over a block is not avoiding it.
+
+Each trial also records ``stepped_over``: every block was crossed above its footprint by at
+least one front and one hind foot (not walked round).
 
 The paper's counts (Table 4, a real robot, 50 trials each) are in :data:`PAPER_TABLE4`, its
 failure analysis (Table 5) in :data:`PAPER_TABLE5`.
@@ -134,6 +144,10 @@ def scenario_summary(records: Iterable[Mapping]) -> dict:
     passed = [r for r in records if r["outcome"] != "fail"]
     out["mean_time_to_pass_s"] = _mean([r.get("time_to_pass") for r in passed])
     out["mean_touch_events"] = _mean([r.get("touch_events") for r in records])
+    # v1 outcome parts (records written before v1 lack them and count as False).
+    out["knocked"] = sum(bool(r.get("knocked")) for r in records)
+    out["stood_on"] = sum(bool(r.get("stood_on")) for r in records)
+    out["stepped_over"] = sum(bool(r.get("stepped_over")) for r in records)
     out["falls"] = sum(bool(r.get("fell")) for r in records)
     out["sim_unstable"] = sum(bool(r.get("sim_unstable")) for r in records)
     out["perception_ms_mean"] = _mean([(r.get("perception_ms") or {}).get("mean") for r in records])

@@ -159,9 +159,9 @@ def _table5(runs: list[Run]) -> list[str]:
 
 def _other(runs: list[Run]) -> list[str]:
     lines = [
-        "| Run | Scenario | Mean time to pass, s | Touch events / trial | Falls | Unstable "
-        "| Perception ms / cycle (mean, max) | Wall s / trial |",
-        "|---|---|---:|---:|---:|---:|---:|---:|",
+        "| Run | Scenario | Mean time to pass, s | Touch events / trial | Knocked | Stood on "
+        "| Stepped over | Falls | Unstable | Perception ms / cycle (mean, max) | Wall s / trial |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for run in runs:
         for s in run.scenarios:
@@ -170,7 +170,8 @@ def _other(runs: list[Run]) -> list[str]:
             wall = np.mean([r.get("wall_s") or 0.0 for r in recs])
             lines.append(
                 f"| {run.label} | {s} | {_f(c['mean_time_to_pass_s'])} | "
-                f"{_f(c['mean_touch_events'], '.1f')} | {c['falls']} | {c['sim_unstable']} | "
+                f"{_f(c['mean_touch_events'], '.1f')} | {c['knocked']} | {c['stood_on']} | "
+                f"{c['stepped_over']} | {c['falls']} | {c['sim_unstable']} | "
                 f"{_f(c['perception_ms_mean'], '.2f')}, {_f(c['perception_ms_max'], '.1f')} | "
                 f"{wall:.1f} |"
             )
@@ -357,8 +358,12 @@ def write_report(
                   + ("" if r.records else " (no finished trial yet)"))  # fmt: skip
     md += ["", "## Table 4: outcomes", ""]
     md += [
-        "Success = passed, never touched; touch = passed but touched; fail = fell, unstable, "
-        "or not passed within the time limit. Rates with 95 % Wilson intervals.",
+        "Outcome v1 (from MuJoCo contacts and poses, `neurocog_gym.envs.obstacle`): success = "
+        "passed, no robot geom ever touched a block; touch = passed, touched, but never stood "
+        "on a block and never knocked one; fail = knocked a block (moved > 2 cm horizontally or "
+        "turned > 10° from where it was placed), stood on a block (its top face carried >= 10 % "
+        "of the robot's weight for 3 cycles), fell, unstable, or not passed within the time "
+        "limit. Rates with 95 % Wilson intervals.",
         "",
     ]
     md += _table4(runs)

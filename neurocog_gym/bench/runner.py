@@ -273,8 +273,12 @@ def _num(x, digits: int = 6) -> float | None:
     return round(x, digits) if math.isfinite(x) else None
 
 
-def make_env(scenario: str, attention: str, max_seconds: float | None):
-    """The scenario's env with the attention setting and the trial time limit."""
+def make_env(scenario: str, attention: str, max_seconds: float | None, privileged: bool = False):
+    """The scenario's env with the attention setting and the trial time limit.
+
+    ``privileged`` adds the simulator's truth to the observation (``true_blocks``, ``feet``),
+    for the privileged oracle (:class:`neurocog_gym.oracle.OraclePolicy`).
+    """
     import gymnasium as gym
 
     import neurocog_gym  # noqa: F401  (registers the ids)
@@ -283,6 +287,8 @@ def make_env(scenario: str, attention: str, max_seconds: float | None):
     kwargs = {"perception": PipelineParams(gng="ddgng" if attention == "on" else "gng")}
     if max_seconds is not None:
         kwargs["max_episode_steps"] = max(1, int(round(max_seconds / CONTROL_DT)))
+    if privileged:
+        kwargs["privileged"] = True
     return gym.make(ENV_IDS[scenario], **kwargs)
 
 
@@ -303,10 +309,17 @@ def run_trial(
 
     Returns:
         The ``trials.jsonl`` record: ``scenario``, ``index``, ``seed``, ``outcome`` (success,
-        touch, fail), ``passed``, ``touched``, ``touch_events``, ``fell``, ``sim_unstable``,
-        ``truncated``, ``obstacles`` (block dicts: x, y, length, width, height in m, yaw in
-        rad), ``appeared_at`` (s), ``time`` (simulated s at the end), ``time_to_pass`` (s from
-        the obstacle's appearance to the pass, None if not passed), ``contacts`` (``steps`` in
+        touch, fail: the v1 outcome of :mod:`neurocog_gym.envs.obstacle`), ``passed``,
+        ``touched``, ``knocked``, ``stood_on``, ``stepped_over`` (every block crossed above it by
+        a front and a hind foot), ``interrupt_cycles`` and ``provision_cycles`` (control cycles
+        whose action had a non-zero interrupt / provision group), ``touch_events``, ``fell``,
+        ``sim_unstable``, ``truncated``, ``obstacles`` (block dicts: x, y, length, width, height
+        in m, yaw in rad as placed; ``pos``, ``quat`` at the end; ``knocked``, ``stood_on``,
+        ``moved`` m, ``turned_deg``, ``feet_over``, ``stepped_over``), ``appeared_at`` (s),
+        ``time`` (simulated s at the end), ``time_to_pass`` (s from the obstacle's appearance to
+        the end of a passed trial, None if not passed), ``time_to_pass_from_appear`` (s from the
+        appearance to the cycle the env first saw the pass, static: from t = 0; None if not
+        passed), ``contacts`` (``steps`` in
         contact, ``first_at`` s, ``events``), ``distance`` (m along x), ``steps``,
         ``aef_mode_steps`` (cycles in mode 0/1/2), ``perception_ms`` (``mean``, ``max``,
         ``gng_mean``, ``affordance_mean`` per control cycle), ``wall_s`` and ``similarity``
@@ -363,6 +376,11 @@ def run_trial(
         "outcome": outcome,
         "passed": passed and not unstable,
         "touched": bool(info.get("touched", u.touched)),
+        "knocked": bool(info.get("knocked", u.knocked)),
+        "stood_on": bool(info.get("stood_on", u.stood_on)),
+        "stepped_over": bool(info.get("stepped_over", False)),
+        "interrupt_cycles": int(info.get("interrupt_cycles", u.interrupt_cycles)),
+        "provision_cycles": int(info.get("provision_cycles", u.provision_cycles)),
         "touch_events": int(info.get("touch_events", u.touch_events)),
         "fell": bool(info.get("fell", False)),
         "sim_unstable": unstable,
@@ -373,6 +391,9 @@ def run_trial(
         "appear_forced": bool(info.get("appear_forced", getattr(u, "appear_forced", False))),
         "time": round(t_end, 4),
         "time_to_pass": round(t_end - t_from, 4) if passed and not unstable else None,
+        "time_to_pass_from_appear": (
+            _num(info.get("time_to_pass_from_appear"), 4) if passed and not unstable else None
+        ),
         "contacts": {
             "steps": contact_steps,
             "first_at": first_touch,
@@ -424,7 +445,10 @@ def _worker_run(spec: TrialSpec) -> dict:
     """Run one trial in a worker (after :func:`_init_worker`)."""
     envs = _WORKER["envs"]
     if spec.scenario not in envs:
-        envs[spec.scenario] = make_env(spec.scenario, _WORKER["attention"], _WORKER["max_seconds"])
+        privileged = bool(getattr(_WORKER["policy"], "needs_privileged", False))
+        envs[spec.scenario] = make_env(
+            spec.scenario, _WORKER["attention"], _WORKER["max_seconds"], privileged
+        )
     try:
         return run_trial(envs[spec.scenario], _WORKER["policy"], spec, _WORKER["similarity"])
     except Exception as e:

@@ -10,35 +10,93 @@ Wall-clock perception timings are not in ``info`` (it must be deterministic for 
 ``env.unwrapped.frame`` is the latest ToF frame (``ToFFrame``); its arrays are read-only views of
 the sensor's buffers that the next frame overwrites: copy them to keep them.
 
-Outcome of an episode (``info["outcome"]`` on its last step), from MuJoCo contacts and positions:
+Outcome v1 of an episode (§6.5, SPEC §8; ``info["outcome"]`` on its last step), from MuJoCo
+contacts and poses, checked once per control cycle (after its physics steps) on every placed
+block, with the thresholds of :class:`OutcomeParams`:
 
-* **touched**: at some control cycle, a MuJoCo contact joined a robot geom (geom group 2) and a
-  placed obstacle geom.
-* **passed**: every foot is beyond the far side of every placed obstacle: the smallest foot
-  position along world x exceeds the largest x of all obstacle boxes (by ``pass_margin``), with
-  the robot upright. Walking around an obstacle passes it too.
-* ``success`` = passed and never touched; ``touch`` = passed and touched; ``fail`` = the robot
-  fell, the physics became unstable, or it had not passed when the time limit ran out (stuck).
+* **touched**: a MuJoCo contact joined a robot geom (geom group 2) and a block's geom.
+* **knocked**: a block's centre moved more than ``knock_shift`` (2 cm) in the horizontal plane
+  from where it was placed, or it turned by more than ``knock_turn_deg`` (10°) about any axis
+  from its placed orientation (the angle of the relative rotation, 2 acos |q_now · q_placed|).
+  The blocks are loose wood: a kick moves them.
+* **stood on**: a robot geom carried part of the body's weight on a block's top face: the
+  contacts between robot geoms and the block whose normal (from the block to the robot) is
+  within ``stand_tilt_deg`` (30°) of world up and whose point lies within ``stand_face_tol``
+  (1 cm) of the top face (the block-frame plane z = +h/2, inside the face grown by the same
+  tolerance) carry a total normal force of at least ``stand_weight_fraction`` (10 %) of the
+  robot's weight for ``stand_cycles`` (3) control cycles in a row.
+* **passed**: every foot is beyond the far side of every block: the smallest foot position
+  along world x exceeds the largest x of the blocks' current axis-aligned boxes by
+  ``pass_margin``, with the robot upright (not fallen). Walking round a block passes it too.
+* **stepped over** (recorded, not part of the outcome): block k's frame has u along its length
+  axis (the walking direction +u) and v across. A foot crosses the block above it when it goes
+  from before the near face (u < -length/2) to beyond the far face (u > +length/2) while every
+  part of its path over the length (-length/2 <= u <= +length/2, the straight segments between
+  control cycles) has |v| <= width/2; a block is stepped over when at least one front foot and
+  one hind foot crossed it so; the trial's ``stepped_over`` = every placed block was (walking
+  round a block leaves no foot above it). See :func:`neurocog_gym.envs._kernels.step_over_step`.
+* ``success`` = passed, never touched; ``touch`` = passed, touched, never stood on a block and
+  never knocked one; ``fail`` = knocked a block, stood on a block, fell, the physics became
+  unstable, or not passed when the time limit ran out (stuck). Climbing a block is not avoiding
+  it.
+
+Also in ``info``: ``interrupt_cycles`` / ``provision_cycles``, the control cycles whose clipped
+action had a non-zero interrupt group (entries 0..11) / provision group (12..14), and
+``time_to_pass_from_appear``, s from the block's appearance (static: from t = 0) to the pass.
 The episode terminates when the robot passes (or falls); the time limit truncates it.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
+import math
+from dataclasses import dataclass, replace
 
+import mujoco
 import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
+from neurocog_gym.envs._kernels import block_outcome_step, step_over_step
 from neurocog_gym.envs.base import QuadrupedEnv, _as_slice
 from neurocog_gym.locomotion.effectivity import Effectivity, EffectivityParams, EffectivityState
 from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
+from neurocog_gym.robot.model import GRAVITY
+from neurocog_gym.robot.names import FRONT_LEGS
 from neurocog_gym.robot.obstacles import ObstaclePool
 from neurocog_gym.robot.tof import ToFArray, ToFParams
 
 N_OBJECTS = 4
 OBJECT_FIELDS = ("dx", "dy", "dz", "height", "width", "length", "gamma", "density")
 AEF_INPUTS = 31
+TRUE_BLOCK_SLOTS = 4
+"""Blocks in the privileged ``true_blocks`` observation (``privileged=True``)."""
+
+
+@dataclass(frozen=True)
+class OutcomeParams:
+    """Thresholds of the v1 outcome (§6.5, SPEC §8; the definitions are in the module docstring)."""
+
+    knock_shift: float = 0.02
+    """m, horizontal displacement of a block's centre from its placed position that knocks it."""
+    knock_turn_deg: float = 10.0
+    """degrees, rotation (about any axis) from its placed orientation that knocks it."""
+    stand_tilt_deg: float = 30.0
+    """degrees, largest angle between a standing contact's normal and world up."""
+    stand_face_tol: float = 0.01
+    """m, how close to the block's top face a standing contact's point must be."""
+    stand_weight_fraction: float = 0.1
+    """Share of the robot's weight the top-face contacts must carry to count as standing."""
+    stand_cycles: int = 3
+    """Control cycles (0.01 s each) in a row the top face must carry that weight."""
+
+    def __post_init__(self):
+        for name in ("knock_shift", "knock_turn_deg", "stand_tilt_deg", "stand_face_tol",
+                     "stand_weight_fraction"):  # fmt: skip
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"OutcomeParams.{name} must be a positive number, got {v}")
+        if int(self.stand_cycles) < 1:
+            raise ValueError(f"OutcomeParams.stand_cycles must be >= 1, got {self.stand_cycles}")
 
 
 class ObstacleEnv(QuadrupedEnv):
@@ -55,9 +113,12 @@ class ObstacleEnv(QuadrupedEnv):
         graph_max_edges: int = 2048,
         pass_margin: float = 0.02,
         warmup_cycles: int = 150,
+        privileged: bool = False,
+        outcome: OutcomeParams | None = None,
         **kwargs,
     ):
         self.include_graph = bool(include_graph)
+        self.privileged = bool(privileged)
         self.graph_max_nodes = int(graph_max_nodes)
         self.graph_max_edges = int(graph_max_edges)
         self.draw_overlay = bool(draw_overlay)
@@ -69,7 +130,7 @@ class ObstacleEnv(QuadrupedEnv):
             include_graph=include_graph, draw_overlay=draw_overlay,
             graph_max_nodes=graph_max_nodes,
             graph_max_edges=graph_max_edges, pass_margin=pass_margin,
-            warmup_cycles=warmup_cycles, **kwargs,
+            warmup_cycles=warmup_cycles, outcome=outcome, privileged=privileged, **kwargs,
         )  # fmt: skip
         self.tof = ToFArray(self.model, tof or ToFParams(backend="numba"))
         self.pipeline = AttentionPipeline(seed=0, params=_env_perception(perception, self.tof))
@@ -89,6 +150,8 @@ class ObstacleEnv(QuadrupedEnv):
         self._was_touching = False
         self.passed = False
         self.perception_time = 0.0
+        self.outcome_params = outcome or OutcomeParams()
+        self._init_outcome_state()
 
     # -- spaces -------------------------------------------------------------------------------
 
@@ -103,6 +166,10 @@ class ObstacleEnv(QuadrupedEnv):
         s["aef_mode"] = spaces.Discrete(3)
         s["foothold"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
         s["foothold_safe"] = spaces.MultiBinary(4)
+        if self.privileged:
+            # The simulator's truth, for the privileged oracle only (``privileged=True``).
+            s["true_blocks"] = spaces.Box(-np.inf, np.inf, (TRUE_BLOCK_SLOTS * 7,), f32)
+            s["feet"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
         if self.include_graph:
             s["graph_nodes"] = spaces.Box(-np.inf, np.inf, (self.graph_max_nodes * 3,), f32)
             s["graph_edges"] = spaces.Box(
@@ -191,9 +258,8 @@ class ObstacleEnv(QuadrupedEnv):
         self.perception_time = 0.0
         self._touch_events_rewarded = 0
         self.frame = None
+        self._reset_outcome()
         self._place_initial_obstacles()
-        import mujoco
-
         mujoco.mj_forward(self.model, self.data)
         # The robot has looked at the scene before the trial starts: warm the map up.
         self._sense_and_perceive(force_frame=True)
@@ -211,14 +277,116 @@ class ObstacleEnv(QuadrupedEnv):
         yaw = self._yaw()
         self._sense_and_perceive(yaw=yaw)
         self._update_effectivity(yaw, touch)
-        touching = self.pool.touching_any(self.data, self.robot.robot_geoms)
+        touching = self._check_blocks(yaw)
         if touching and not self._was_touching:
             self.touch_events += 1
         self._was_touching = touching
         self.touched |= touching
         if self.pool.blocks:
             far = float(self.pool.boxes()[:, 1, 0].max())
-            self.passed = bool(self._feet()[:, 0].min() > far + self.pass_margin)
+            beyond = bool(self._feet()[:, 0].min() > far + self.pass_margin)
+            self.passed = beyond and not self._fell()
+            if self.passed and self.passed_at is None:
+                self.passed_at = float(self.data.time)
+
+    # -- outcome bookkeeping ----------------------------------------------------------------------
+
+    def _init_outcome_state(self) -> None:
+        """Preallocate the per-block outcome state (one row per pool slot)."""
+        n = self.pool.capacity
+        p = self.outcome_params
+        self._cos_max_tilt = math.cos(math.radians(p.stand_tilt_deg))
+        self._cos_half_max_turn = math.cos(math.radians(p.knock_turn_deg) / 2.0)
+        self._min_stand_force = p.stand_weight_fraction * self.robot.mass * GRAVITY
+        self._elliptic = bool(self.model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC)
+        self._is_front = np.zeros(4, dtype=bool)
+        self._is_front[list(FRONT_LEGS)] = True
+        self._no_contacts = (
+            np.zeros((0, 2), np.int32), np.zeros((0, 3)), np.zeros((0, 9)),
+            np.zeros(0, np.int32), np.zeros(0, np.int32), np.zeros(0),
+        )  # fmt: skip
+        self._blk_touch = np.zeros(n, dtype=bool)
+        self._blk_top_force = np.zeros(n)
+        self._blk_stand_run = np.zeros(n, dtype=np.int64)
+        self._blk_stood = np.zeros(n, dtype=bool)
+        self._blk_shift = np.zeros(n)
+        self._blk_turn = np.zeros(n)
+        self._blk_knocked = np.zeros(n, dtype=bool)
+        self._blk_axis_sign = np.ones(n)
+        self._over_state = np.full((n, 4), -1, dtype=np.int8)
+        self._over_crossed = np.zeros((n, 4), dtype=bool)
+        self._prev_feet = np.zeros((4, 3))
+        self._reset_outcome()
+
+    def _reset_outcome(self) -> None:
+        self._serial_seen = self.pool.serial.copy()
+        for k in range(self.pool.capacity):
+            self._reset_slot(k)
+        self._has_prev_feet = False
+        self.knocked = False
+        self.stood_on = False
+        self.interrupt_cycles = 0
+        self.provision_cycles = 0
+        self.passed_at: float | None = None
+
+    def _reset_slot(self, k: int) -> None:
+        """Slot ``k`` holds a new block: forget the last one's state."""
+        self._blk_touch[k] = self._blk_stood[k] = self._blk_knocked[k] = False
+        self._blk_top_force[k] = self._blk_shift[k] = self._blk_turn[k] = 0.0
+        self._blk_stand_run[k] = 0
+        self._over_state[k] = -1
+        self._over_crossed[k] = False
+
+    def _check_blocks(self, yaw: float) -> bool:
+        """This cycle's contact and pose checks of the blocks (the outcome); True if touching."""
+        pool, d = self.pool, self.data
+        touching = pool.touching_any(d, self.robot.robot_geoms)
+        feet = self._feet()
+        k = len(pool.blocks)
+        if k:
+            if not np.array_equal(pool.serial, self._serial_seen):
+                for slot in np.flatnonzero(pool.serial != self._serial_seen):
+                    self._reset_slot(int(slot))
+                self._serial_seen = pool.serial.copy()
+            if touching:
+                n, con = d.ncon, d.contact
+                contacts = (con.geom[:n], con.pos[:n], con.frame[:n], con.efc_address[:n],
+                            con.dim[:n], d.efc_force)  # fmt: skip
+            else:
+                contacts = self._no_contacts  # the stand check needs robot-block contacts
+            block_outcome_step(
+                *contacts, self._elliptic, pool.slot_of, pool.robot_mask(self.robot.robot_geoms),
+                k, pool.body_ids, d.xpos, d.xmat, d.xquat, pool.half_sizes, pool.placed_pos,
+                pool.placed_quat, self._cos_max_tilt, self.outcome_params.stand_face_tol,
+                self._min_stand_force, int(self.outcome_params.stand_cycles),
+                self.outcome_params.knock_shift, self._cos_half_max_turn, self._blk_touch,
+                self._blk_top_force, self._blk_stand_run, self._blk_stood, self._blk_shift,
+                self._blk_turn, self._blk_knocked,
+            )  # fmt: skip
+            heading = np.array([math.cos(yaw), math.sin(yaw)])
+            step_over_step(
+                feet, self._prev_feet, self._has_prev_feet, heading, k, pool.body_ids, d.xpos,
+                d.xmat, pool.half_sizes, self._blk_axis_sign, self._over_state,
+                self._over_crossed,
+            )  # fmt: skip
+            self.knocked |= bool(self._blk_knocked[:k].any())
+            self.stood_on |= bool(self._blk_stood[:k].any())
+        self._prev_feet[:] = feet
+        self._has_prev_feet = True
+        return touching
+
+    def _blocks_stepped_over(self) -> np.ndarray:
+        """(K,) bool: at least one front foot and one hind foot crossed the block above it."""
+        c = self._over_crossed[: len(self.pool.blocks)]
+        return c[:, self._is_front].any(axis=1) & c[:, ~self._is_front].any(axis=1)
+
+    def _before_control(self, interrupt: np.ndarray, provision: np.ndarray) -> None:
+        """Count the cycles whose (clipped) action used each output group."""
+        super()._before_control(interrupt, provision)
+        if interrupt.any():
+            self.interrupt_cycles += 1
+        if provision.any():
+            self.provision_cycles += 1
 
     def _task_event(self) -> None:
         """Tasks add sudden obstacles here (runs right after the physics step)."""
@@ -238,19 +406,44 @@ class ObstacleEnv(QuadrupedEnv):
         return obs, reward, terminated, truncated, info
 
     def _outcome(self, fell: bool, unstable: bool) -> dict:
-        if unstable or fell:
+        """The v1 outcome so far and its parts (the definitions are in the module docstring)."""
+        if unstable or fell or self.knocked or self.stood_on:
             outcome = "fail"
         elif self.passed:
             outcome = "touch" if self.touched else "success"
         else:
             outcome = "fail"  # provisional: not passed (yet); final when the episode ends
+        k = len(self.pool.blocks)
+        over = self._blocks_stepped_over()
+        blocks = self.pool.blocks_json()
+        for i, b in enumerate(blocks):
+            b.update(
+                knocked=bool(self._blk_knocked[i]),
+                stood_on=bool(self._blk_stood[i]),
+                moved=round(float(self._blk_shift[i]), 6),
+                turned_deg=round(math.degrees(float(self._blk_turn[i])), 4),
+                feet_over=[bool(x) for x in self._over_crossed[i]],
+                stepped_over=bool(over[i]),
+            )
+        appeared = getattr(self, "appeared_at", None)
+        from_appear = (
+            round(self.passed_at - appeared, 4)
+            if self.passed_at is not None and appeared is not None
+            else None
+        )
         return {
             "outcome": outcome,
             "passed": self.passed,
             "touched": self.touched,
+            "knocked": self.knocked,
+            "stood_on": self.stood_on,
+            "stepped_over": bool(k and over.all()),
             "touch_events": self.touch_events,
             "fell": fell,
-            "obstacles": self.pool.blocks_json(),
+            "interrupt_cycles": self.interrupt_cycles,
+            "provision_cycles": self.provision_cycles,
+            "time_to_pass_from_appear": from_appear,
+            "obstacles": blocks,
             "aef_mode": int(self.eff.mode) if self.eff is not None else 0,
         }
 
@@ -315,12 +508,38 @@ class ObstacleEnv(QuadrupedEnv):
             foothold=foothold.astype(np.float32).ravel(),
             foothold_safe=safe,
         )
+        if self.privileged:
+            obs["true_blocks"] = self._true_blocks(rot, torso)
+            feet = (self._feet() - torso) @ rot.T
+            feet[:, 2] = self._feet()[:, 2]
+            obs["feet"] = feet.astype(np.float32).ravel()
         if self.include_graph:
             g = self.pipeline.net.padded(self.graph_max_nodes, self.graph_max_edges)
             obs["graph_nodes"] = g.nodes.astype(np.float32).ravel()
             obs["graph_edges"] = g.edges.astype(np.int64).ravel()
             obs["graph_counts"] = np.array([g.n_nodes, g.n_edges], np.int64)
         return obs
+
+    def _true_blocks(self, rot: np.ndarray, torso: np.ndarray) -> np.ndarray:
+        """(TRUE_BLOCK_SLOTS * 7,) the placed blocks' true current boxes (privileged).
+
+        Per slot: valid (1/0), centre x, y relative to the torso in its yaw frame (m), yaw of
+        the block's length axis relative to the heading (rad), half length, half width (m),
+        height of its top above the floor (m). Read from MuJoCo's geom poses, so a pushed block
+        is where it is now.
+        """
+        out = np.zeros((TRUE_BLOCK_SLOTS, 7), np.float32)
+        d, m = self.data, self.model
+        heading = np.arctan2(rot[0, 1], rot[0, 0])
+        for k, g in enumerate(self.pool.geom_ids[: min(len(self.pool.blocks), TRUE_BLOCK_SLOTS)]):
+            c = d.geom_xpos[g]
+            xmat = d.geom_xmat[g].reshape(3, 3)
+            rel = rot @ (c - torso)
+            yaw = np.arctan2(xmat[1, 0], xmat[0, 0]) - heading
+            yaw = (yaw + np.pi) % (2 * np.pi) - np.pi
+            half = m.geom_size[g]
+            out[k] = (1.0, rel[0], rel[1], yaw, half[0], half[1], c[2] + half[2])
+        return out.ravel()
 
     # -- rendering ------------------------------------------------------------------------------
 

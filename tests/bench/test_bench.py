@@ -329,3 +329,36 @@ def test_pool_worker_keeps_torch_to_one_thread():
     finally:
         torch.set_num_threads(before)
         runner._WORKER.clear()
+
+
+def test_scenario_summary_counts_the_v1_outcome_parts():
+    from neurocog_gym.bench.outcome import scenario_summary
+
+    recs = [
+        {"outcome": "fail", "knocked": True, "stood_on": False, "stepped_over": False},
+        {"outcome": "fail", "knocked": True, "stood_on": True, "stepped_over": True},
+        {"outcome": "success", "knocked": False, "stood_on": False, "stepped_over": True},
+        {"outcome": "touch"},  # a record from before v1: none of them
+    ]
+    s = scenario_summary(recs)
+    assert (s["knocked"], s["stood_on"], s["stepped_over"]) == (2, 1, 2)
+    assert (s["success"], s["touch"], s["fail"]) == (1, 1, 2)
+
+
+def test_trial_record_has_the_v1_fields():
+    import gymnasium as gym
+
+    from neurocog_gym.bench.runner import TrialSpec, run_trial
+    from neurocog_gym.policies import make_policy
+
+    env = gym.make("NeuroCog/StaticObstacle-v1", max_episode_steps=30)
+    rec = run_trial(env, make_policy("blind"), TrialSpec("static", 0, 5))
+    for key in ("outcome", "passed", "touched", "touch_events", "time_to_pass", "obstacles",
+                "knocked", "stood_on", "stepped_over", "interrupt_cycles", "provision_cycles",
+                "time_to_pass_from_appear"):  # fmt: skip
+        assert key in rec, key
+    assert rec["interrupt_cycles"] == 0 and rec["provision_cycles"] == 0  # blind
+    assert rec["time_to_pass_from_appear"] is None and not rec["passed"]
+    assert len(rec["obstacles"][0]["pos"]) == 3
+    json.dumps(rec, allow_nan=False)
+    env.close()
