@@ -71,33 +71,33 @@ from neurocog_gym.locomotion.gait import Gait
 class TrotDesign:
     """Numbers of the hand design (module docstring); defaults are the shipped gait."""
 
-    hg: float = 2.48
+    hg: float = 2.9995
     """m_i of the front hip flexor and extensor."""
-    hgh: float = 2.76
+    hgh: float = 2.0442
     """m_i of the hind hip flexor and extensor."""
-    kf: float = 1.0027
+    kf: float = 1.4316
     """m_i of the front knee flexor."""
     ke: float = 0.0
     """m_i of the front knee extensor."""
-    kfh: float = 1.0944
+    kfh: float = 1.1075
     """m_i of the hind knee flexor."""
-    keh: float = 0.9822
+    keh: float = 0.6799
     """m_i of the hind knee extensor."""
-    tf: float = 0.6576
+    tf: float = 0.5960
     """tau_f, CPG frequency scale."""
-    kr: float = 266.5897
+    kr: float = 275.1260
     """k_rest, restoring stiffness of the pools, 1/s^2."""
     zeta: float = 0.7545
     """Damping ratio of the pools' restoring term (d_rest = 2 zeta sqrt(k_rest))."""
-    am: float = 170.3574
+    am: float = 104.5131
     """theta_dd_MAX, rad/s^2 (Eq. 8)."""
-    ph: float = -0.6018
+    ph: float = -0.8963
     """Front hip posture, rad."""
-    pk: float = 1.1488
+    pk: float = 1.4801
     """Front knee posture, rad."""
-    phh: float = -0.5525
+    phh: float = -0.6926
     """Hind hip posture, rad."""
-    pkh: float = 1.3007
+    pkh: float = 1.2632
     """Hind knee posture, rad."""
     pa: float = -0.0061
     """Abduction posture, rad, feet outward (left legs +, right legs -)."""

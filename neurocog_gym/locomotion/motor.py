@@ -31,15 +31,23 @@ class MotorParams:
 
     mu1: float = 1.0
     """mu_1, gain of the CPG input, dimensionless (Eq. 8)."""
-    mu2: float = 3.0
-    """mu_2, gain of the interrupt Theta, dimensionless (Eq. 8): three times the CPG's authority, so
-    an interrupt can hold a leg far from its rhythmic path (the paper leaves mu_2 free)."""
+    mu2: float = 10.0
+    """mu_2, gain of the interrupt Theta, dimensionless (Eq. 8; the paper leaves it free). Ten times
+    the CPG's clipped authority: a lift must move the knee about 0.9 rad within 0.15 s against
+    the restoring term (k_rest 0.9 rad ~ 235 rad/s^2) and reach the servo speed within two cycles,
+    which needs mu_2 theta_dd_MAX F_l >~ 600 rad/s^2 with theta_dd_MAX ~ 100 (body v1's gait);
+    with 3 (body v0) a full knee interrupt lifted the foot 8 cm at most
+    (``scripts/bench_interrupt_lift.py``, docs/body.md)."""
     acc_max: tuple[float, ...] = field(default_factory=lambda: _twelve(120.0))
     """theta_dd_MAX per joint, rad/s^2 (Eq. 8; "chosen through preliminary testing")."""
-    vel_max: tuple[float, ...] = field(default_factory=lambda: _twelve(7.0))
-    """theta_dot_MAX per joint, rad/s: the servo's no-load speed (MX-64 class), Eq. (10)."""
-    fl_width: tuple[float, ...] = field(default_factory=lambda: _twelve(1.4))
-    """theta_R * omega, rad: distance from theta_opt where F_l falls to 0.05 (Eq. 9)."""
+    vel_max: tuple[float, ...] = field(default_factory=lambda: _twelve(6.6))
+    """theta_dot_MAX per joint, rad/s: the servo's no-load speed, Eq. (10) (Dynamixel MX-64,
+    63 rpm at 12 V)."""
+    fl_width: tuple[float, ...] = field(default_factory=lambda: _twelve(2.0))
+    """theta_R * omega, rad: distance from theta_opt where F_l falls to 0.05 (Eq. 9). 2.0 rad
+    keeps F_l >= 0.5 over the knee's whole range from its posture (1.6 -> 2.8 rad), so an
+    interrupt keeps its authority where a step-over needs the knee (body v0 used 1.4: F_l fell
+    to 0.45 at 0.9 rad and capped the held lift)."""
     fl_c: float = float(np.log(0.05))
     """c = ln 0.05 (Eq. 9)."""
     fv_K: float = 1.0
