@@ -111,7 +111,7 @@ def plot_gait(t, foot_z, touch, hip, cpg, path: Path, window: float = 3.0) -> No
 def bench_demo(
     out: str | Path,
     trials: int = 4,
-    policies: tuple[str, ...] = ("avoid", "aef", "aef-provision", "blind"),
+    policies: tuple[str, ...] = ("oracle", "aef", "aef-provision", "blind"),
     seed: int = 0,
     workers: int | None = None,
 ) -> tuple[Path, list[str]]:

@@ -146,7 +146,7 @@ def _load_sb3(path: Path):
     raise ValueError(f"{path} is not a stable-baselines3 model ({errors[0]})")
 
 
-POLICY_NAMES = ("aef", "aef-provision", "blind", "avoid", "ppo")
+POLICY_NAMES = ("aef", "aef-provision", "blind", "avoid", "oracle", "ppo")
 """Named policies; anything else is a file (AEF weights or a stable-baselines3 model)."""
 
 
@@ -160,6 +160,8 @@ def make_policy(spec: str):
     * ``"avoid"``: :class:`neurocog_gym.avoid.AvoidPolicy` (the back-off / side-step reflex for
       sudden blocks on top of ``aef-provision``; bind it with ``policy.reset(env)`` after each
       ``env.reset``);
+    * ``"oracle"``: :class:`neurocog_gym.oracle.OraclePolicy`, the privileged scripted
+      step-over (reads the true block boxes: make its env with ``privileged=True``);
     * ``"ppo"``: the shipped stable-baselines3 PPO policy (:class:`SB3Policy` on
       ``assets/ppo_sudden/model.zip`` and its observation statistics): cloned from the AEF,
       then 35 min of PPO on ``SuddenObstacle-v0`` (``assets/ppo_sudden/args.json``,
@@ -181,6 +183,10 @@ def make_policy(spec: str):
         from neurocog_gym.avoid import AvoidPolicy
 
         return AvoidPolicy()
+    if spec == "oracle":
+        from neurocog_gym.oracle import OraclePolicy
+
+        return OraclePolicy()
     if spec == "ppo":
         env_id = shipped_ppo_env()
         if env_id not in _registered_ids():

@@ -61,9 +61,10 @@ def body_figures(model: mujoco.MjModel | None = None) -> dict:
 
     Returns:
         ``thigh_m``, ``shank_m`` (joint-to-joint and knee-to-foot-centre lengths),
-        ``foot_radius_m``, ``mass_kg`` (whole robot), ``torso_mass_kg`` (torso body incl. its geoms), ``leg_mass_kg``
-        (one leg: hip block, thigh, shank, foot), ``hip_height_m`` (hip flexion axis above the
-        floor in the ``home`` keyframe, after 1 s of standing on the home servo targets),
+        ``foot_radius_m``, ``mass_kg`` (whole robot), ``torso_mass_kg`` (torso body incl. its
+        geoms), ``leg_mass_kg`` (one leg: hip block, thigh, shank, foot), ``hip_height_m``
+        (hip flexion axis above the floor in the ``home`` keyframe, after 1 s of standing on
+        the home servo targets),
         ``stance_width_m`` (lateral distance between left and right feet), ``hip_spacing_m``
         (fore-aft distance between front and hind hips), ``servo`` (stall torque N m, kp N m/rad,
         kv N m s/rad, armature kg m^2 of the hip actuator) and ``joint_range`` per joint kind.
