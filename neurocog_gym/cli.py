@@ -216,7 +216,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-video", action="store_true", help="skip the video (faster)")
     p.add_argument("--trials", type=_nonneg_int, default=4,
                    help="obstacle trials per scenario and policy (0: walk only)")  # fmt: skip
-    p.add_argument("--policies", default="avoid,aef,aef-provision,blind",
+    p.add_argument("--policies", default="oracle,aef,aef-provision,blind",
                    help="comma-separated policies of the short benchmark")  # fmt: skip
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="parallel trials (None: all local cores)")  # fmt: skip
@@ -265,7 +265,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_nonneg_int, default=0,
                    help="run seed (trial seeds derive from seed, scenario, i)")  # fmt: skip
     p.add_argument("--policy", default="aef",
-                   help="aef, aef-provision (interrupts off), blind, avoid (back-off and "
+                   help="aef, aef-provision (interrupts off), blind, oracle (privileged "
+                        "step-over script), avoid (back-off and "
                         "side-step reflex + aef-provision), ppo (the shipped PPO policy: "
                         "trained on v0, refused until retrained on v1), AEF weights (.npz) or "
                         "a stable-baselines3 model (.zip)")  # fmt: skip

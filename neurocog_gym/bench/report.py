@@ -81,6 +81,7 @@ def run_label(config: dict) -> str:
         "aef-provision": "AEF provision only",
         "blind": "blind",
         "avoid": "avoid reflex + AEF provision",
+        "oracle": "oracle (privileged step-over)",
         "ppo": "PPO (shipped, v0 envs)",  # trained and benched on v0; v1 refuses it
     }
     if policy not in names:
