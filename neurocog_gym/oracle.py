@@ -3,27 +3,32 @@
 It shows what body v1 and its motor-neuron pools can do when perception and learning are taken
 out: the upper-bound row of the benchmark, not the paper's controller. It needs the obstacle
 env's privileged observation keys (``gymnasium.make(id, privileged=True)``): ``true_blocks``
-(the simulator's block boxes) and ``feet`` (the soles' positions). Nothing else of the env is
-read; the decision is the policy's.
+(the simulator's block boxes) and ``feet`` (the soles' positions), besides the ordinary
+``touch``, ``foothold`` (the effectivity's predicted footholds) and joint angles. Nothing else of
+the env is read; the decision is the policy's.
 
-Per leg, a three-state script on the interrupt group:
+Per leg, while it swings (touch below ``touch_off``) and the other leg of its pair (FL-FR,
+HL-HR) stands, the script asks whether this swing meets a block: one in the foot's lane (its
+lateral position in the block's frame within the half-width plus ``lane_margin``) whose near
+face lies before the predicted foothold plus ``trigger`` and whose far face is still ahead of
+the sole. If it does:
 
-1. **idle** until the leg swings (its touch input below ``touch_off``, the other leg of its pair
-   FL-FR / HL-HR standing) and a block lies in its lane ahead (the foot's lateral position, in
-   the block's frame, within the block's half-width plus ``lane_margin``; the near face less
-   than ``trigger`` ahead of the sole);
-2. **up**: the foot is driven to a waypoint ``approach`` before the near face and
-   ``clearance`` above the block's top;
-3. **over**: then to a waypoint ``beyond`` past the far face at the same height; once the
-   sole is past the far face the interrupt is released and the CPG puts the foot down.
+* **step over**, when the far face is at most ``max_over`` ahead of the sole: *lift* with the
+  lift interrupt (hip ``lift_hip``, knee +1: the foot rises about where it is) until the sole is
+  ``clearance`` above the top, then *carry* (hip -1, knee ``carry_knee``; the knee folds fully
+  whenever the sole sinks towards the top) until the sole is ``beyond`` past the far face, then
+  release: the CPG puts the foot down beyond the block;
+* **drop**, otherwise (the block is too far to clear, or the swing is already under way: a swing
+  carried over from mid-swing reaches only about 5 cm further while high): the swing goes on
+  until the sole is ``drop_gap`` from the near face, then hip +1, knee -1 until the foot is
+  down (measured on body v1: it lands within 0.05 s, 2 cm further on), with the walking
+  provision s_SAG = ``brake_sag`` (the trot marches in place) meanwhile, so that the next
+  swing starts just in front of the block and steps over it from its lift-off.
 
-Each waypoint is turned into hip and knee angles by the leg's two-link inverse kinematics
-(thigh and shank lengths read from the model file) in the torso's frame, and the interrupt is
-a PD law on the measured joint angles, Theta = clip(kp (q* - q) - kd q_dot, -1, 1): with mu_2 = 10
-it overrides the CPG's clipped drive tenfold. Abduction stays 0. A leg is released after
-``max_hold`` seconds whatever its state; while any leg steps over, the stride is shortened
-(``s_SAG = slow_sag``, our choice). A leg starts only while its pair partner stands: lifting both
-front legs at once dropped the torso onto the block.
+The lift-and-carry numbers were measured on body v1 in the open (``docs/body.md``): the sole
+stays above 9 cm from 3 cm behind to 20 cm ahead of where the lift began. A leg is released after
+``max_hold`` seconds whatever its state (a leg held much longer than one swing loses the trot's
+diagonal support).
 """
 
 from __future__ import annotations
@@ -33,12 +38,12 @@ from dataclasses import dataclass
 import numpy as np
 
 ACTION_DIM = 15
-IDLE, LIFT, CARRY, SHORT = 0, 1, 2, 3
+IDLE, LIFT, CARRY, DROP, APPROACH = 0, 1, 2, 3, 4
 
 
 @dataclass(frozen=True)
 class OracleParams:
-    """Thresholds and gains of the scripted step-over (metres, seconds, radians)."""
+    """Thresholds of the scripted step-over (metres, seconds)."""
 
     foot_radius: float = 0.018
     """Sole sphere radius, m (assets/quadruped.xml)."""
@@ -46,31 +51,28 @@ class OracleParams:
     """Touch input below which a foot is in the air."""
     lane_margin: float = 0.03
     """Lateral margin beyond the block's half-width (plus the foot radius) of a leg's lane, m."""
-    trigger: float = 0.03
-    """A swinging foot reacts to a near face less than this beyond its predicted foothold, m."""
-    approach: float = 0.03
-    """The "up" waypoint's distance before the near face (sole to face), m."""
-    clearance: float = 0.035
-    """Sole height above the block's top at both waypoints, m."""
-    beyond: float = 0.04
-    """The "over" waypoint's distance past the far face (sole to face), m; the leg is released
-    once the sole is half of it past the face."""
-    kp: float = 8.0
-    """Interrupt per radian of joint error."""
-    kd: float = 0.05
-    """Interrupt per rad/s of joint rate."""
-    max_over: float = 0.17
-    """Farthest far face (from the sole, along the block) a swing is carried over, m: the lift and
-    carry keep the sole above 9 cm from 3 cm behind to 20 cm ahead of where it started."""
-    max_hold: float = 0.35
-    """Longest a leg is held, s."""
+    trigger: float = 0.04
+    """A swing meets a block whose near face is less than this beyond its predicted foothold."""
+    clearance: float = 0.03
+    """Sole height above the block's top before the foot is carried forward, m."""
+    beyond: float = 0.03
+    """Sole past the far face before the foot is released, m."""
+    max_over: float = 0.20
+    """Farthest far face (from the sole, along the block) a swing is carried over, m."""
+    lift_hip: float = 0.3
+    """Hip entry of the lift (``neurocog_gym.bench.body.LIFT_HIP``)."""
     carry_knee: float = 0.5
     """Knee entry while carrying the foot over (measured on body v1: with 0.5 the sole stays
     above 9 cm over 23 cm of forward travel; 0 or -0.5 drop it within 3-10 cm; 1 stalls it)."""
-    slow_sag: float = 0.0
-    """s_SAG while a leg lifts (-0.5: the trot marches in place, ``generator.py``)."""
-    lift_hip: float = 0.3
-    """Hip entry of the lift (``neurocog_gym.bench.body.LIFT_HIP``)."""
+    brake_sag: float = -0.5
+    """s_SAG while a leg drops (-0.5: stride scale 0, the trot marches in place,
+    ``generator.py``)."""
+    drop_gap: float = 0.04
+    """A foot that cannot step over drops once its sole is this close to the near face, m."""
+    fresh_swing: float = 0.03
+    """A step-over starts only this soon after the lift-off, s (later, the foot drops)."""
+    max_hold: float = 0.45
+    """Longest a leg is held in lift or carry, s."""
     dt: float = 0.01
     """Control cycle, s."""
 
@@ -86,17 +88,7 @@ class OraclePolicy:
     needs_privileged = True
 
     def __init__(self, params: OracleParams | None = None):
-        from neurocog_gym.robot.model import RobotIndex, load_model
-
         self.p = params or OracleParams()
-        m = load_model()
-        r = RobotIndex.build(m)
-        # Body constants from the model file: thigh origin in the torso frame, segment lengths.
-        self.hip_offset = np.array(
-            [m.body_pos[r.hip_body[k]] + m.body_pos[r.thigh_body[k]] for k in range(4)]
-        )
-        self.l1 = float(np.linalg.norm(m.body_pos[r.shank_body[0]]))
-        self.l2 = float(np.linalg.norm(m.geom_pos[r.foot_geom[0]]))
         self.reset()
 
     def reset(self, env=None) -> None:
@@ -104,7 +96,7 @@ class OraclePolicy:
         self.state = np.zeros(4, dtype=np.int64)
         self.held = np.zeros(4)
         self.block = np.full(4, -1, dtype=np.int64)
-        self.hold = np.zeros(4)
+        self.air = np.zeros(4)
 
     def __call__(self, obs) -> np.ndarray:
         """The action for one observation of an obstacle env made with ``privileged=True``."""
@@ -116,104 +108,65 @@ class OraclePolicy:
         p = self.p
         blocks = np.asarray(obs["true_blocks"], dtype=np.float64).reshape(-1, 7)
         feet = np.asarray(obs["feet"], dtype=np.float64).reshape(4, 3)
+        footholds = np.asarray(obs["foothold"], dtype=np.float64).reshape(4, 3)
         touch = np.asarray(obs["touch"], dtype=np.float64)
-        q = np.asarray(obs["joint_pos"], dtype=np.float64)
-        qd = np.asarray(obs["joint_vel"], dtype=np.float64)
-        rot = _yaw_frame_rotation(np.asarray(obs["torso_quat"], dtype=np.float64))
-        height = float(np.asarray(obs["torso_height"])[0])
         action = np.zeros(ACTION_DIM, dtype=np.float32)
         for leg in range(4):
             sole = feet[leg, 2] - p.foot_radius
+            down = touch[leg] >= p.touch_off
+            self.air[leg] = 0.0 if down else self.air[leg] + p.dt
             st = self.state[leg]
             if st != IDLE:
                 self.held[leg] += p.dt
                 b = blocks[self.block[leg]]
                 lx, _ = _in_block(feet[leg, :2], b)
-                if self.held[leg] > p.max_hold or b[0] == 0.0:
+                if st == APPROACH:
+                    gap = -b[4] - lx - p.foot_radius
+                    st = IDLE if down else (DROP if gap <= p.drop_gap else APPROACH)
+                if st == DROP:
+                    if down:
+                        st = IDLE
+                elif self.held[leg] > p.max_hold or b[0] == 0.0:
                     st = IDLE
-                elif st == LIFT and sole > b[6] + 0.5 * p.clearance:
-                    st = CARRY
-                if st == CARRY and lx - p.foot_radius > b[4] + 0.5 * p.beyond:
-                    st = IDLE
-                if st == SHORT and touch[leg] >= p.touch_off:
-                    st = IDLE
-                if st == IDLE:
-                    self.held[leg] = 0.0
-                    self.block[leg] = -1
-            partner = leg ^ 1  # FL <-> FR, HL <-> HR
-            partner_down = touch[partner] >= p.touch_off and self.state[partner] == IDLE
-            if st == IDLE and touch[leg] < p.touch_off and partner_down:
-                foothold = np.asarray(obs["foothold"], dtype=np.float64).reshape(4, 3)[leg, :2]
-                k, far = self._block_ahead(feet[leg, :2], foothold, blocks)
+                else:
+                    if st == LIFT and sole > b[6] + p.clearance:
+                        st = CARRY
+                    if st == CARRY and lx - p.foot_radius > b[4] + p.beyond:
+                        st = IDLE
+            partner = leg ^ 1  # FL <-> FR, HL <-> HR: never both legs of a pair in the air
+            partner_down = touch[partner] >= p.touch_off and self.state[partner] in (IDLE, DROP, APPROACH)
+            if st == IDLE and not down and partner_down:
+                k, far = self._block_met(feet[leg, :2], footholds[leg, :2], blocks)
                 if k >= 0:
-                    # Over it if this swing can reach past its far face, else land short of it
-                    # and step over on the next swing.
-                    st = LIFT if far <= p.max_over else SHORT
+                    fresh = self.air[leg] <= p.fresh_swing
+                    st = LIFT if far <= p.max_over and fresh else APPROACH
                     self.block[leg], self.held[leg] = k, 0.0
-                    self.hold[leg] = q[3 * leg + 1]
-            self.state[leg] = st
             if st == IDLE:
-                continue
-            b = blocks[self.block[leg]]
-            c, s = np.cos(b[3]), np.sin(b[3])
-            if st == LIFT:
-                along = -b[4] - p.foot_radius - p.approach
-            else:
-                along = b[4] + p.foot_radius + p.beyond
-            # The waypoint in the yaw frame relative to the torso (x, y) and above the floor (z).
-            lx, ly = _in_block(feet[leg, :2], b)
-            wx = b[1] + c * along - s * ly
-            wy = b[2] + s * along + c * ly
-            wz = b[6] + p.clearance + p.foot_radius
-            target = np.array([wx, wy, wz - height])
-            body = rot.T @ target - self.hip_offset[leg]  # torso frame, from the hip joint
-            hip, knee = self._ik(body[0], body[2])
+                self.held[leg] = 0.0
+                self.block[leg] = -1
+            self.state[leg] = st
             j = 3 * leg
-            action[j + 1] = np.clip(p.kp * (hip - q[j + 1]) - p.kd * qd[j + 1], -1.0, 1.0)
-            action[j + 2] = np.clip(p.kp * (knee - q[j + 2]) - p.kd * qd[j + 2], -1.0, 1.0)
-            # Below the waypoint's height the knee folds at full authority, and over the block
-            # the hip protracts at full authority: the whole step-over must fit in about one
-            # swing (the next diagonal pair lifts half a CPG period after this one).
-            if st == SHORT:
-                # Land short: hold the hip where it was (no further protraction), knee free.
-                action[j + 1] = np.clip(
-                    p.kp * (self.hold[leg] - q[j + 1]) - p.kd * qd[j + 1], -1.0, 1.0
-                )
-                continue
+            if st == DROP:
+                action[j + 1] = 1.0
+                action[j + 2] = -1.0
             if st == LIFT:
-                # Rise where the foot is: the lift interrupt (hip slightly back, knee folding).
                 action[j + 1] = p.lift_hip
                 action[j + 2] = 1.0
-            else:
-                # Carry: the hip protracts at full authority while the knee holds part of its
-                # fold (``carry_knee``), folding fully whenever the sole sinks towards the top.
+            elif st == CARRY:
+                top = blocks[self.block[leg], 6]
                 action[j + 1] = -1.0
-                action[j + 2] = 1.0 if sole < b[6] + 0.5 * p.clearance else p.carry_knee
-        if (self.state == LIFT).any():
-            action[12] = p.slow_sag
+                action[j + 2] = 1.0 if sole < top + 0.5 * p.clearance else p.carry_knee
+        if (self.state == DROP).any():
+            action[12] = p.brake_sag
         return action
 
-    def _ik(self, x: float, z: float) -> tuple[float, float]:
-        """Hip and knee angles that put the foot centre at (x, z) from the hip joint (sagittal).
-
-        Knee folded backwards (positive), as the robot's legs bend; out-of-reach points are
-        pulled onto the reachable annulus.
-        """
-        l1, l2 = self.l1, self.l2
-        d = float(np.clip(np.hypot(x, z), abs(l1 - l2) + 0.02, l1 + l2 - 0.005))
-        knee = np.pi - np.arccos(np.clip((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1, 1))
-        phi = np.arctan2(x, -z)
-        alpha = np.arccos(np.clip((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1, 1))
-        return float(-(phi + alpha)), float(knee)
-
-    def _block_ahead(
+    def _block_met(
         self, foot_xy: np.ndarray, foothold: np.ndarray, blocks: np.ndarray
     ) -> tuple[int, float]:
-        """Index of the nearest block in this foot's lane that this swing would meet.
+        """The nearest block in this foot's lane that this swing would meet, or -1.
 
-        It meets a block whose near face lies before the predicted foothold (``foothold``,
-        the env's effectivity prediction) plus ``trigger``, and whose far face is ahead of
-        the sole. Returns the index (-1: none) and the sole's distance to that far face, m.
+        Returns the block's index and the distance from the sole to its far face along the
+        block's length axis, m.
         """
         p = self.p
         best, best_gap, best_far = -1, np.inf, np.inf
@@ -223,26 +176,12 @@ class OraclePolicy:
             lx, ly = _in_block(foot_xy, b)
             if abs(ly) > b[5] + p.foot_radius + p.lane_margin:
                 continue
-            gap = -b[4] - lx - p.foot_radius  # sole to near face, along the block's length axis
-            far = b[4] - lx + p.foot_radius
-            reach = _in_block(foothold, b)[0] - lx  # how far this swing goes, along the block
-            if far > 0.0 and gap < reach + p.trigger and gap < best_gap:
+            gap = -b[4] - lx - p.foot_radius  # sole to near face
+            far = b[4] - lx + p.foot_radius  # sole to far face
+            landing = _in_block(foothold, b)[0] - lx  # where this swing puts the foot
+            if far > 0.0 and gap < landing + p.trigger and gap < best_gap:
                 best, best_gap, best_far = k, gap, far
         return best, best_far
-
-
-def _yaw_frame_rotation(quat: np.ndarray) -> np.ndarray:
-    """(3, 3) the torso's orientation seen from its yaw frame (roll and pitch only)."""
-    w, x, y, z = quat
-    full = np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])  # fmt: skip
-    yaw = np.arctan2(full[1, 0], full[0, 0])
-    c, s = np.cos(yaw), np.sin(yaw)
-    to_yaw = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-    return to_yaw @ full
 
 
 def _in_block(foot_xy: np.ndarray, b: np.ndarray) -> tuple[float, float]:

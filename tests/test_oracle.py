@@ -22,14 +22,27 @@ def test_oracle_refuses_an_observation_without_the_privileged_keys():
     env.close()
 
 
-def test_inverse_kinematics_inverts_the_leg():
+def test_a_swing_that_meets_a_block_from_its_lift_off_lifts_that_foot():
     policy = OraclePolicy()
-    l1, l2 = policy.l1, policy.l2
-    for hip, knee in [(-0.8, 1.6), (-1.2, 2.3), (-0.5, 0.9), (-1.6, 1.9)]:
-        # Foot centre from the hip joint, sagittal plane (x ahead, z up), as the body is built.
-        x = -l1 * np.sin(hip) - l2 * np.sin(hip + knee)
-        z = -l1 * np.cos(hip) - l2 * np.cos(hip + knee)
-        assert np.allclose(policy._ik(x, z), (hip, knee), atol=1e-9)
+    # One block 10 cm long, its near face 4 cm ahead of the FL sole, top 7 cm; the FL foot has
+    # just lifted (touch 0), its pair partner FR stands; the predicted foothold lies on the block.
+    blocks = np.zeros((4, 7), np.float32)
+    blocks[0] = (1.0, 0.30, 0.12, 0.0, 0.05, 0.10, 0.07)
+    feet = np.array([[0.232, 0.12, 0.02], [0.2, -0.12, 0.018], [-0.2, 0.12, 0.018],
+                     [-0.2, -0.12, 0.018]], np.float32)  # fmt: skip
+    foothold = feet.copy()
+    foothold[0, 0] = 0.33
+    obs = {"true_blocks": blocks.ravel(), "feet": feet.ravel(), "foothold": foothold.ravel(),
+           "touch": np.array([0.0, 1.0, 1.0, 0.0], np.float32)}  # fmt: skip
+    a = policy(obs)
+    assert policy.state[0] == 1  # LIFT
+    assert a[2] == 1.0 and a[1] == pytest.approx(policy.p.lift_hip)  # knee folds, hip back a bit
+    assert np.all(a[3:] == 0.0)
+    # The same swing 0.1 s later (not fresh): it cannot be carried over, so it approaches.
+    policy.reset()
+    policy.air[0] = 0.1
+    a = policy(obs)
+    assert policy.state[0] == 4  # APPROACH: no interrupt until the sole is near the face
 
 
 def test_true_blocks_observation_gives_the_placed_blocks():
