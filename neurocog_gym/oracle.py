@@ -134,7 +134,11 @@ class OraclePolicy:
                     if st == CARRY and lx - p.foot_radius > b[4] + p.beyond:
                         st = IDLE
             partner = leg ^ 1  # FL <-> FR, HL <-> HR: never both legs of a pair in the air
-            partner_down = touch[partner] >= p.touch_off and self.state[partner] in (IDLE, DROP, APPROACH)
+            partner_down = touch[partner] >= p.touch_off and self.state[partner] in (
+                IDLE,
+                DROP,
+                APPROACH,
+            )
             if st == IDLE and not down and partner_down:
                 k, far = self._block_met(feet[leg, :2], footholds[leg, :2], blocks)
                 if k >= 0:
