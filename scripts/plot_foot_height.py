@@ -25,9 +25,9 @@ from neurocog_gym.robot.names import LEGS
 
 def record(policy_name: str, seed: int) -> dict:
     """One trial; per control cycle: time, sole heights, interrupt phases."""
-    env = make_env("sudden", "on", None)
-    u = env.unwrapped
     policy = make_policy(policy_name)
+    env = make_env("sudden", "on", None, getattr(policy, "needs_privileged", False))
+    u = env.unwrapped
     obs, info = env.reset(seed=seed)
     radius = u.effectivity.p.foot_radius
     start_episode(policy, env)
@@ -42,6 +42,7 @@ def record(policy_name: str, seed: int) -> dict:
         state.append(u.effectivity.avoidance.state)
         lead.append(float(u._feet()[:, 0].max()))
     outcome = info["outcome"] if info.get("passed") else "fail"
+    outcome += "".join(f", {k}" for k in ("knocked", "stood_on", "fell") if info.get(k))
     blocks = [b.to_json() for b in u.pool.blocks]
     env.close()
     return {"t": np.array(t), "z": np.array(z), "phase": np.array(phase), "outcome": outcome,
@@ -77,7 +78,7 @@ def main() -> None:
                                 transform=ax.get_xaxis_transform(),
                                 label=f"{LEGS[leg]} interrupt phase")  # fmt: skip
         colours = {1: "tab:red", 2: "tab:purple", 3: "tab:green"}
-        if name != "blind":  # the blind CPG ignores the effectivity's provision
+        if name not in ("blind", "oracle"):  # they ignore the effectivity's provision
             for st, colour in colours.items():
                 on = r["state"] == st
                 if on.any():

@@ -32,28 +32,33 @@ from neurocog_gym.policies import make_policy, start_episode  # noqa: E402
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--policy", default="aef", choices=("aef", "avoid", "ppo"), help="controller")
+    ap.add_argument("--policy", default="aef", choices=("aef", "avoid", "ppo", "blind", "oracle"),
+                    help="controller (blind and oracle: four frames evenly spaced from the "
+                         "block's appearance to 1.2 s later)")  # fmt: skip
     ap.add_argument("--seed", type=int, default=1, help="episode seed")
     ap.add_argument("--width", type=int, default=400, help="width of one frame, pixels")
     ap.add_argument("--height", type=int, default=360, help="frame height, pixels")
     ap.add_argument("--camera", default="follow", help="scene camera: follow, side or overhead")
     ap.add_argument("--out", default="docs/img/aef_sudden_strip.png", help="PNG to write")
     args = ap.parse_args(argv)
+    policy = make_policy(args.policy)
     env = gym.make(
         "NeuroCog/SuddenObstacle-v1",
         render_mode="rgb_array",
         width=args.width,
         height=args.height,
         camera_name=args.camera,
+        privileged=bool(getattr(policy, "needs_privileged", False)),
     )
     obs, _ = env.reset(seed=args.seed)
-    policy = make_policy(args.policy)
     start_episode(policy, env)
     u = env.unwrapped
 
     def state() -> str:
         if args.policy == "avoid":
             return policy.state
+        if args.policy in ("blind", "oracle"):
+            return ""
         return u.effectivity.avoidance.state_name
 
     frames, states, times, appeared = [], [], [], None
@@ -70,6 +75,14 @@ def main(argv: list[str] | None = None) -> None:
     if appeared is None:
         raise SystemExit(f"seed {args.seed}: no block appeared; try another seed")
     dt = times[1] - times[0]
+    if args.policy in ("blind", "oracle"):
+        end = min(appeared + int(1.2 / dt), len(frames) - 1)
+        picks = [int(round(v)) for v in np.linspace(appeared, end, 4)]
+        strip = np.concatenate([frames[i] for i in picks], axis=1)
+        with atomic_path(args.out) as tmp:
+            iio.imwrite(tmp, strip)
+        print(f"wrote {args.out}: frames at t = {', '.join(f'{times[i]:.2f}' for i in picks)} s")
+        return
     before = max(appeared - int(0.05 / dt), 0)
     backing = min(appeared + int(0.15 / dt), len(frames) - 1)
     passing = next((i for i, s in enumerate(states) if s == "pass"), len(frames) // 2)
