@@ -84,7 +84,11 @@ class SuddenObstacleEnv(ObstacleEnv):
     ``touch_cost`` (1.0: the reward lost per new contact with a block; with the pass bonus of 100
     a touched pass earns nearly what a clean one does — raise it to make touching matter),
     ``tof`` (``ToFParams``), ``perception`` (``PipelineParams``: ``gng="gng"`` switches the
-    attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``.
+    attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``, ``outcome``
+    (``OutcomeParams``: the knock and stand-on thresholds), ``privileged`` (False; True adds
+    the simulator's truth for the privileged oracle: ``true_blocks`` (4 x 7: valid, centre x, y
+    in the torso's yaw frame, yaw, half length, half width, top height) and ``feet`` (4 x 3:
+    soles in the yaw frame, z above the floor), both flattened).
     """  # noqa: E501
 
     def __init__(
