@@ -61,3 +61,20 @@ def test_recheck_trials_finds_a_changed_record(tmp_path):
                           "--every", "1"], capture_output=True, text=True, cwd=ROOT)  # fmt: skip
     assert res.returncode == 1
     assert "DIFF" in res.stdout and "'steps'" in res.stdout and "1 of 2 re-run" in res.stdout
+
+
+def test_search_gait_script_scores_and_writes_only_improvements(tmp_path):
+    out = tmp_path / "best.json"
+    res = _script(
+        "search_gait.py", "--iters", "1", "--seeds", "1", "--seconds", "2.5", "--out", out
+    )
+    assert res.stdout.startswith("start: cost ")
+    # The file appears only when a candidate beat the start.
+    assert out.exists() == (res.stdout.count("cost") > 1)
+
+
+def test_body_figures_script_writes_the_body_page(tmp_path):
+    out = tmp_path / "body.md"
+    _script("body_figures.py", "--seeds", "1", "--swings", "1", "--phases", "2", "--out", out)
+    text = out.read_text()
+    assert "| thigh, shank | 0.200 m, 0.200 m" in text and "reached 11 cm" in text

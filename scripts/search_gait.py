@@ -1,0 +1,157 @@
+"""The local random search that found body v1's trot numbers (``scripts/design_gait.py``).
+
+Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers multiplied by
+``1 + N(0, sigma)``; it walks ``--seconds`` on ``NeuroCog/Walk-v1`` (zero action) for each of
+``--seeds`` seeds, the first 2 s left out, and is kept when its cost is lower. Cost per seed:
+
+* 100 for a fall, plus 10 per second it fell short;
+* 10 x |speed - 0.5 m/s| (forward x displacement per second);
+* per leg: the median swing clearance below 3.2 cm or above 4.8 cm (per cm), half the amount by
+  which its highest swing exceeds 5.8 cm;
+* |lateral drift| / 6 m;
+* 20 x the share of time both feet of one side are off the ground (a pace-like gait);
+* 0.3 x short touch-downs (contacts under 80 ms) per second.
+
+Body v1's numbers came from four chained runs of this search (about 1,100 candidates): from the
+v0 numbers scaled to the longer legs (theta_dd_MAX x 0.55, tau_f x 1.3, knee synapses x 0.7,
+posture hip -0.8 / knee 1.6) with 2 seeds and without the last two terms (400 + 200
+candidates), then, after the result turned out pace-like, with 6 seeds and with them (3 seeds,
+330 candidates). The best design is written to ``--out`` as JSON; ``python
+scripts/design_gait.py --params OUT`` turns it into a gait file.
+
+    python scripts/search_gait.py --start START.json --seeds 3 --iters 400 --rng 5 --out best.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from design_gait import TrotDesign, build  # noqa: E402
+
+from neurocog_gym.envs.walk import WalkEnv  # noqa: E402
+
+KEYS = ("hg", "hgh", "kf", "kfh", "keh", "tf", "am", "ph", "pk", "phh", "pkh", "kr")
+
+
+@dataclasses.dataclass(frozen=True)
+class Args:
+    """Command-line arguments."""
+
+    start: str = ""
+    """JSON of TrotDesign fields to start from ('' = design_gait.py's defaults)."""
+    seeds: int = 3
+    """Walking seeds per candidate."""
+    seconds: float = 8.0
+    """Simulated seconds per seed."""
+    iters: int = 400
+    """Candidates."""
+    sigma: float = 0.06
+    """Relative perturbation of a number."""
+    rng: int = 0
+    """Seed of the search's own random draws."""
+    out: str = "runs/gait_search/best.json"
+    """Best design so far (written atomically whenever it improves)."""
+
+
+def walk_stats(design: TrotDesign, seed: int, seconds: float) -> dict:
+    """Walk the design's gait; fall, speed, clearances, drift, one-side share, short contacts."""
+    env = WalkEnv(gait=build(design))
+    env.reset(seed=seed)
+    r = env.robot
+    radius = env.model.geom_size[r.foot_geom, 0]
+    xs, feet, touch, fell = [], [], [], False
+    for _ in range(int(seconds / env.dt)):
+        _, _, term, trunc, _ = env.step(np.zeros(15))
+        xs.append(env.data.qpos[:2].copy())
+        feet.append(env.data.site_xpos[r.foot_site][:, 2] - radius)
+        touch.append(env.touch() > 0.05)
+        if term or trunc:
+            fell = True
+            break
+    env.close()
+    n0 = int(2.0 / env.dt)
+    xs, feet, on = np.array(xs), np.array(feet), np.array(touch)
+    if len(xs) <= n0:
+        return {"fell": True, "t": len(xs) * env.dt}
+    span = (len(xs) - n0) * env.dt
+    med, top = [], []
+    for leg in range(4):
+        h, peaks, i = feet[n0:, leg], [], 0
+        while i < len(h):
+            j = i
+            while j < len(h) and h[j] > 0.003:
+                j += 1
+            if j - i >= 6:
+                peaks.append(h[i:j].max())
+            i = j + 1
+        med.append(float(np.median(peaks)) if peaks else 0.0)
+        top.append(float(np.max(peaks)) if peaks else 0.0)
+    o = on[n0:]
+    side = float(((~o[:, 0] & ~o[:, 2]) | (~o[:, 1] & ~o[:, 3])).mean())
+    short = 0
+    for leg in range(4):
+        run = 0
+        for k in range(1, len(o)):
+            if not o[k, leg]:
+                run += 1
+            else:
+                short += 0 < run < 8
+                run = 0
+    return {"fell": fell, "t": len(xs) * env.dt, "speed": (xs[-1, 0] - xs[n0, 0]) / span,
+            "clear": med, "top": top, "drift": float(xs[-1, 1] - xs[0, 1]), "side": side,
+            "short": short / span}  # fmt: skip
+
+
+def cost(design: TrotDesign, seeds: int, seconds: float) -> float:
+    """The search's cost (module docstring), summed over the seeds."""
+    c = 0.0
+    for seed in range(seeds):
+        s = walk_stats(design, seed, seconds)
+        if s["fell"]:
+            c += 100.0 + 10.0 * (seconds - s["t"])
+            if "speed" not in s:
+                continue
+        c += 10.0 * abs(s["speed"] - 0.5)
+        for med, top in zip(s["clear"], s["top"], strict=True):
+            c += 100 * max(0.0, 0.032 - med) + 100 * max(0.0, med - 0.048)
+            c += 50 * max(0.0, top - 0.058)
+        c += abs(s["drift"]) / 6.0 + 20.0 * s["side"] + 0.3 * s["short"]
+    return c
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    for f in dataclasses.fields(Args):
+        parser.add_argument(f"--{f.name}", type=type(f.default), default=f.default)
+    args = Args(**vars(parser.parse_args(argv)))
+    if args.seeds < 1 or args.iters < 0 or not args.sigma > 0:
+        parser.error("--seeds must be >= 1, --iters >= 0, --sigma > 0")
+    best = TrotDesign()
+    if args.start:
+        best = dataclasses.replace(best, **json.loads(Path(args.start).read_text()))
+    rng = np.random.default_rng(args.rng)
+    best_cost = cost(best, args.seeds, args.seconds)
+    print(f"start: cost {best_cost:.3f}", flush=True)
+    from neurocog_gym import io as nio
+
+    for it in range(args.iters):
+        changes = {}
+        for k in rng.choice(KEYS, size=int(rng.integers(1, 3)), replace=False):
+            changes[str(k)] = float(getattr(best, str(k)) * (1.0 + rng.normal(0.0, args.sigma)))
+        cand = dataclasses.replace(best, **changes)
+        c = cost(cand, args.seeds, args.seconds)
+        if c < best_cost:
+            best, best_cost = cand, c
+            print(f"{it}: cost {c:.3f} {changes}", flush=True)
+            nio.atomic_write_text(args.out, json.dumps(dataclasses.asdict(best), indent=1))
+
+
+if __name__ == "__main__":
+    main()
