@@ -10,13 +10,13 @@ from neurocog_gym.bench.outcome import (
     tally,
     wilson_interval,
 )
+from neurocog_gym.bench.records import load_trials
 from neurocog_gym.bench.report import write_report
 from neurocog_gym.bench.runner import (
     BenchConfig,
     BenchResult,
     SimilaritySettings,
     TrialSpec,
-    load_trials,
     run_benchmark,
     run_trial,
     trial_seed,

@@ -26,6 +26,7 @@ from neurocog_gym.bench.outcome import (
     scenario_summary,
     wilson_interval,
 )
+from neurocog_gym.bench.records import load_trials
 
 COLOURS = {"success": "#2e7d32", "touch": "#f9a825", "fail": "#c62828"}
 
@@ -54,8 +55,6 @@ class Run:
 
 def load_run(path: str | os.PathLike) -> Run:
     """Read a run folder (``trials.jsonl`` and, if there, ``summary.json``)."""
-    from neurocog_gym.bench.runner import load_trials
-
     path = Path(path)
     if not path.is_dir():
         raise FileNotFoundError(f"run folder {path} does not exist")

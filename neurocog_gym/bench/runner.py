@@ -44,6 +44,8 @@ import numpy as np
 
 from neurocog_gym import io
 from neurocog_gym.bench.outcome import PAPER_TABLE4, SCENARIOS, scenario_summary
+from neurocog_gym.bench.records import load_trials
+from neurocog_gym.bench.report import write_report
 
 ENV_IDS: dict[str, str] = {
     "sudden": "NeuroCog/SuddenObstacle-v1",
@@ -557,17 +559,6 @@ def _ray(
 # -- the run -----------------------------------------------------------------------------------
 
 
-def load_trials(out: str | os.PathLike) -> list[dict]:
-    """Finished trial records of a run folder, first record per (scenario, index) kept."""
-    seen, records = set(), []
-    for r in io.read_jsonl(Path(out) / "trials.jsonl"):
-        key = (r.get("scenario"), r.get("index"))
-        if key not in seen:
-            seen.add(key)
-            records.append(r)
-    return records
-
-
 def summarize(records: list[dict], config: BenchConfig, elapsed_s: float | None = None) -> dict:
     """``summary.json``: per scenario the tally and Table 5 analysis, plus ``config``."""
     out = {}
@@ -698,8 +689,6 @@ def run_benchmark(config: BenchConfig) -> BenchResult:
     summary = summarize(records, config, elapsed)
     io.atomic_write_json(summary_path, summary)
     if config.report:
-        from neurocog_gym.bench.report import write_report
-
         write_report([config.out], config.out)
     return BenchResult(
         summary=summary, ran=ran, skipped=skipped, elapsed_s=elapsed, workers=used["workers"]
