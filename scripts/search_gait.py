@@ -38,6 +38,8 @@ from design_gait import TrotDesign, build  # noqa: E402
 from neurocog_gym.envs.walk import WalkEnv  # noqa: E402
 
 KEYS = ("hg", "hgh", "kf", "kfh", "keh", "tf", "am", "ph", "pk", "phh", "pkh", "kr")
+GENE_KEYS = ("ke", "c1", "ring", "ring2", "kk", "kk6", "w", "wb")
+"""With ``--genes``: the CPG's synapse weights too (design_gait.py's docstring names them)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +60,8 @@ class Args:
     """Seed of the search's own random draws."""
     out: str = "runs/gait_search/best.json"
     """Best design so far (written atomically whenever it improves)."""
+    genes: bool = False
+    """Perturb the CPG weights of ``GENE_KEYS`` as well."""
 
 
 def walk_stats(design: TrotDesign, seed: int, seconds: float) -> dict:
@@ -129,7 +133,10 @@ def cost(design: TrotDesign, seeds: int, seconds: float) -> float:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for f in dataclasses.fields(Args):
-        parser.add_argument(f"--{f.name}", type=type(f.default), default=f.default)
+        if isinstance(f.default, bool):
+            parser.add_argument(f"--{f.name}", action="store_true")
+        else:
+            parser.add_argument(f"--{f.name}", type=type(f.default), default=f.default)
     args = Args(**vars(parser.parse_args(argv)))
     if args.seeds < 1 or args.iters < 0 or not args.sigma > 0:
         parser.error("--seeds must be >= 1, --iters >= 0, --sigma > 0")
@@ -141,10 +148,14 @@ def main(argv: list[str] | None = None) -> None:
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
 
+    keys = KEYS + GENE_KEYS if args.genes else KEYS
     for it in range(args.iters):
         changes = {}
-        for k in rng.choice(KEYS, size=int(rng.integers(1, 3)), replace=False):
-            changes[str(k)] = float(getattr(best, str(k)) * (1.0 + rng.normal(0.0, args.sigma)))
+        for k in rng.choice(keys, size=int(rng.integers(1, 3)), replace=False):
+            v = float(getattr(best, str(k)))
+            # A number near zero is moved by an absolute step (a relative one would keep it there).
+            step = rng.normal(0.0, args.sigma)
+            changes[str(k)] = v * (1.0 + step) if abs(v) > 0.05 else v + step
         cand = dataclasses.replace(best, **changes)
         c = cost(cand, args.seeds, args.seconds)
         if c < best_cost:

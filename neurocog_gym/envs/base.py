@@ -100,7 +100,11 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
             )
         self.robot = RobotIndex.build(self.model)
         self.generator = LocomotionGenerator(
-            self.gait, self.robot.joint_lo, self.robot.joint_hi, dt=self.dt
+            self.gait,
+            self.robot.joint_lo,
+            self.robot.joint_hi,
+            dt=self.dt,
+            knee_behind=self.robot.knee_behind,
         )
         self._weight_per_leg = self.robot.mass * GRAVITY / 4.0
         # The joints' qpos/qvel entries, actuators and touch sensors are contiguous in the
@@ -168,7 +172,7 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
             "torso_ang_vel": d.qvel[3:6].astype(np.float32),
             "torso_height": d.qpos[2:3].astype(np.float32),
             "cpg": self.generator.cpg.y.astype(np.float32),
-            "servo_target": self.generator.pools.q_ref.astype(np.float32),
+            "servo_target": self.generator.pools.target.astype(np.float32),
         }
 
     def _get_obs(self) -> dict[str, np.ndarray]:
@@ -185,7 +189,7 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         qpos[self.robot.qpos_adr] += rng.uniform(-noise, noise, size=12)
         self.set_state(qpos, qvel)
         self.generator.reset(rng, noise=0.05)
-        self.data.ctrl[self.robot.actuator] = self.generator.pools.q_ref
+        self.data.ctrl[self.robot.actuator] = self.generator.pools.target
         self._power = 0.0
         self._warn_stats = [self.data.warning[int(w)] for w in FAULT_WARNINGS]
         self._warnings_seen = self._warning_count()

@@ -94,7 +94,7 @@ def force_velocity(v_muscle, v_max, K, N):
 def motor_neuron_step(
     q_ref, qd_ref, drive, theta_int, theta, theta_dot, touch, posture,
     mu1, mu2, acc_max, vel_max, fl_width, fl_c, fv_K, fv_N, Z,
-    k_rest, d_rest, q_lo, q_hi, dt, acc_out,
+    k_rest, d_rest, q_lo, q_hi, dt, acc_out, coupling, joint_lo, joint_hi, target_out,
 ):  # fmt: skip
     """One control cycle of the 12 motor-neuron pools (Eq. 8, 9, 10, 11), in place.
 
@@ -135,9 +135,20 @@ def motor_neuron_step(
         q_hi: (12,) upper joint limits, rad.
         dt: control cycle, s.
         acc_out: (12,) output, the Eq. (8) acceleration (without the restoring term).
+        coupling: (12,) 1 at the hip of a knee-behind leg, else 0: the pools work in leg
+            coordinates (``motor.leg_coordinates``), pool angle = theta_j - coupling_j theta_j+1.
+        joint_lo: (12,) lower joint limits, rad, for the servo targets.
+        joint_hi: (12,) upper joint limits, rad.
+        target_out: (12,) output, the servo targets in joint angles,
+            q_ref_j + coupling_j q_ref_j+1 within the joint limits.
     """
     n = q_ref.shape[0]
     for i in range(n):
+        th = theta[i]
+        thd = theta_dot[i]
+        if coupling[i] != 0.0:
+            th -= coupling[i] * theta[i + 1]
+            thd -= coupling[i] * theta_dot[i + 1]
         a = mu1 * drive[i]
         if a > 1.0:
             a = 1.0
@@ -145,8 +156,8 @@ def motor_neuron_step(
             a = -1.0
         a += mu2 * theta_int[i]
         # The active muscle shortens when the joint moves the way it pulls.
-        v_muscle = -theta_dot[i] if a >= 0.0 else theta_dot[i]
-        fl = force_length(theta[i], posture[i], fl_width[i], fl_c)
+        v_muscle = -thd if a >= 0.0 else thd
+        fl = force_length(th, posture[i], fl_width[i], fl_c)
         fv = force_velocity(v_muscle, vel_max[i], fv_K, fv_N)
         s = 0.0
         for k in range(touch.shape[0]):
@@ -168,6 +179,15 @@ def motor_neuron_step(
             qd = 0.0
         q_ref[i] = q
         qd_ref[i] = qd
+    for i in range(n):
+        t = q_ref[i]
+        if coupling[i] != 0.0:
+            t += coupling[i] * q_ref[i + 1]
+        if t > joint_hi[i]:
+            t = joint_hi[i]
+        elif t < joint_lo[i]:
+            t = joint_lo[i]
+        target_out[i] = t
 
 
 @njit(cache=True)

@@ -97,6 +97,9 @@ class LocomotionGenerator:
         q_lo, q_hi: (12,) joint ranges, rad.
         dt: control cycle, s.
         cpg_params, motor_params, provision_params: component constants.
+        knee_behind: (4,) bool, legs whose knee folds behind the foot (``RobotIndex``); the
+            gait's posture and the interrupt are then in leg coordinates
+            (``motor.leg_coordinates``). Default: none.
     """
 
     def __init__(
@@ -108,6 +111,7 @@ class LocomotionGenerator:
         cpg_params: CPGParams | None = None,
         motor_params: MotorParams | None = None,
         provision_params: ProvisionParams | None = None,
+        knee_behind: np.ndarray | None = None,
     ):
         from dataclasses import replace
 
@@ -124,7 +128,9 @@ class LocomotionGenerator:
             k_rest=gait.k_rest,
             d_rest=gait.d_rest,
         )
-        self.pools = MotorNeuronPools(self.posture, q_lo, q_hi, motor_params, dt)
+        self.pools = MotorNeuronPools(
+            self.posture, q_lo, q_hi, motor_params, dt, knee_behind=knee_behind
+        )
         self.prov = provision_params or ProvisionParams()
         self.provision = np.zeros(3)
         self.drive = np.zeros(12)

@@ -64,6 +64,29 @@ class MotorParams:
     """Restoring damping, 1/s (damping ratio 0.5 with k_rest = 160)."""
 
 
+def leg_coordinates(knee_behind) -> np.ndarray:
+    """(12,) coupling of the pools' leg coordinates: 1 at the hip of each knee-behind leg.
+
+    The pools of a leg drive (hip, knee) for a knee-ahead leg and (shank pitch, knee) for a
+    knee-behind one, the shank pitch being hip - knee (the knee axis is reversed, so the shank's
+    pitch to the torso is the hip angle minus the fold). Both legs' feet then sit at the same
+    place for the same pool angles: the foot's direction from the hip is pool_hip + knee / 2 and
+    its distance 2 l cos(knee / 2) for segments of length l, so a gait and an interrupt written
+    for one knee direction move the foot the same way with the other. The hip servo's target
+    is pool_hip + knee (``_kernels.motor_neuron_step``). Body v2 folds every knee behind its
+    foot (issue 21: a knee ahead of the foot leads the shank into a block's near edge).
+
+    Args:
+        knee_behind: (4,) bool per leg (FL, FR, HL, HR).
+    """
+    kb = np.asarray(knee_behind, dtype=bool)
+    if kb.shape != (4,):
+        raise ValueError(f"knee_behind must be 4 booleans (FL, FR, HL, HR), got shape {kb.shape}")
+    c = np.zeros(12)
+    c[3 * np.flatnonzero(kb) + 1] = 1.0
+    return c
+
+
 class MotorNeuronPools:
     """Twelve motor-neuron pools that integrate Eq. (8) into servo position targets.
 
@@ -72,14 +95,26 @@ class MotorNeuronPools:
         q_lo, q_hi: (12,) joint range, rad.
         params: pool constants.
         dt: control cycle, s.
+        knee_behind: (4,) bool, legs whose knee folds behind the foot (``leg_coordinates``);
+            ``posture``, ``q_ref`` and the interrupt's joint group are then in leg coordinates,
+            ``target`` in joint angles. Default: no leg (pool angles = joint angles).
     """
 
-    def __init__(self, posture, q_lo, q_hi, params: MotorParams | None = None, dt=0.01):
+    def __init__(
+        self, posture, q_lo, q_hi, params: MotorParams | None = None, dt=0.01, knee_behind=None
+    ):
         self.params = p = params or MotorParams()
         self.dt = float(dt)
         self.posture = np.asarray(posture, dtype=np.float64).copy()
-        self.q_lo = np.asarray(q_lo, dtype=np.float64).copy()
-        self.q_hi = np.asarray(q_hi, dtype=np.float64).copy()
+        self.joint_lo = np.asarray(q_lo, dtype=np.float64).copy()
+        self.joint_hi = np.asarray(q_hi, dtype=np.float64).copy()
+        self.coupling = leg_coordinates(np.zeros(4, bool) if knee_behind is None else knee_behind)
+        # The pools' own range: every shank pitch the joint ranges reach.
+        self.q_lo = self.joint_lo.copy()
+        self.q_hi = self.joint_hi.copy()
+        for j in np.flatnonzero(self.coupling):
+            self.q_lo[j] = self.joint_lo[j] - self.joint_hi[j + 1]
+            self.q_hi[j] = self.joint_hi[j] - self.joint_lo[j + 1]
         self.acc_max = np.asarray(p.acc_max, dtype=np.float64)
         self.vel_max = np.asarray(p.vel_max, dtype=np.float64)
         self.fl_width = np.asarray(p.fl_width, dtype=np.float64)
@@ -89,15 +124,20 @@ class MotorNeuronPools:
         self.q_ref = np.zeros(12)
         self.qd_ref = np.zeros(12)
         self.acc = np.zeros(12)
+        self.target = np.zeros(12)
+        """(12,) servo targets in joint angles, rad (``q_ref`` in joint coordinates)."""
 
     def reset(self, q0: np.ndarray) -> None:
-        """Start from servo targets ``q0`` (12,), at rest."""
+        """Start from pool angles ``q0`` (12,), at rest."""
         self.q_ref[:] = q0
         self.qd_ref[:] = 0.0
         self.acc[:] = 0.0
+        c = self.coupling
+        self.target[:] = np.clip(self.q_ref + c * np.roll(self.q_ref, -1), self.joint_lo,
+                                 self.joint_hi)  # fmt: skip
 
     def step(self, drive, interrupt, theta, theta_dot, touch) -> np.ndarray:
-        """One control cycle; returns the (12,) servo targets (a view of the internal buffer).
+        """One control cycle; returns the (12,) servo targets in joint angles (``self.target``).
 
         Args:
             drive: (12,) CPG drive of each joint, dimensionless.
@@ -112,6 +152,7 @@ class MotorNeuronPools:
             np.asarray(interrupt, dtype=np.float64), theta, theta_dot,
             np.asarray(touch, dtype=np.float64), self.posture, p.mu1, p.mu2, self.acc_max,
             self.vel_max, self.fl_width, p.fl_c, p.fv_K, p.fv_N, self.Z,
-            p.k_rest, p.d_rest, self.q_lo, self.q_hi, self.dt, self.acc,
+            p.k_rest, p.d_rest, self.q_lo, self.q_hi, self.dt, self.acc, self.coupling,
+            self.joint_lo, self.joint_hi, self.target,
         )  # fmt: skip
-        return self.q_ref
+        return self.target

@@ -73,6 +73,10 @@ class RobotIndex:
     """(12,) servo targets of the ``home`` keyframe, rad."""
     mass: float
     """Total robot mass, kg."""
+    knee_behind: np.ndarray
+    """(4,) bool, legs whose knee folds behind the foot. The MJCF convention: a positive knee
+    angle folds the leg, so a knee joint about +y has its knee ahead of the foot and one about
+    -y behind it (``locomotion.motor.leg_coordinates``)."""
 
     @classmethod
     def build(cls, model: mujoco.MjModel) -> RobotIndex:
@@ -107,4 +111,5 @@ class RobotIndex:
             home_qpos=model.key_qpos[key].copy(),
             home_ctrl=model.key_ctrl[key].copy(),
             mass=float(model.body_subtreemass[torso]),
+            knee_behind=model.jnt_axis[joints[2::3], 1] < 0.0,
         )

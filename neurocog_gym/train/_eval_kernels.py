@@ -24,7 +24,7 @@ def generator_cycle(
     qpos, qvel, sensordata, ctrl, qpos_adr, dof_adr, touch_adr, actuator, weight_per_leg,
     cpg_x, cpg_v, W, V, cpg_consts, n_sub, joint_neurons, g_flex, g_ext,
     q_ref, qd_ref, posture, motor_consts, acc_max, vel_max, fl_width, Z, q_lo, q_hi, dt,
-    zeros12, y_out, x_max, gain,
+    zeros12, y_out, x_max, gain, coupling, joint_lo, joint_hi, target,
 ):  # fmt: skip
     """One 0.01 s cycle of CPG (Eq. 5-7) and motor-neuron pools (Eq. 8-11); writes ``ctrl``.
 
@@ -61,6 +61,10 @@ def generator_cycle(
         zeros12: (12,) zeros (the interrupt).
         y_out: (24,) receives the CPG outputs.
         x_max: bound on |x_i| beyond which the CPG counts as diverged.
+        coupling: (12,) the pools' leg coordinates (``motor.leg_coordinates``).
+        joint_lo: (12,) lower joint limits, rad (servo targets).
+        joint_hi: (12,) upper joint limits, rad.
+        target: (12,) receives the servo targets in joint angles (written to ``ctrl``).
         gain: the soft-start factor on the drive (``LocomotionGenerator``'s ``start_ramp``:
             ``elapsed / start_ramp`` during the ramp, then exactly 1).
 
@@ -92,6 +96,7 @@ def generator_cycle(
         q_ref, qd_ref, drive, zeros12, theta, theta_dot, touch, posture,
         motor_consts[0], motor_consts[1], acc_max, vel_max, fl_width, motor_consts[2],
         motor_consts[3], motor_consts[4], Z, motor_consts[5], motor_consts[6], q_lo, q_hi, dt, acc,
+        coupling, joint_lo, joint_hi, target,
     )  # fmt: skip
     y_out[:] = y
     for i in range(n):
@@ -101,7 +106,7 @@ def generator_cycle(
         if not abs(cpg_x[i]) <= x_max:  # also catches NaN
             return False
     for i in range(n):
-        ctrl[actuator[i]] = q_ref[i]
+        ctrl[actuator[i]] = target[i]
     return True
 
 

@@ -48,14 +48,16 @@ def record_babbling(
     robot = RobotIndex.build(model)
     mujoco.mj_resetDataKeyframe(model, data, 0)
     posture = np.asarray(gait.posture)
-    data.qpos[robot.qpos_adr] = posture
-    data.qpos[2] = STAND_HEIGHT
-    pin = data.qpos[:7].copy()
     mp = replace(
         MotorParams(), acc_max=(gait.acc_max,) * 12, k_rest=gait.k_rest, d_rest=gait.d_rest
     )
-    pools = MotorNeuronPools(posture, robot.joint_lo, robot.joint_hi, mp, dt=0.01)
+    pools = MotorNeuronPools(
+        posture, robot.joint_lo, robot.joint_hi, mp, dt=0.01, knee_behind=robot.knee_behind
+    )
     pools.reset(posture)
+    data.qpos[robot.qpos_adr] = pools.target
+    data.qpos[2] = STAND_HEIGHT
+    pin = data.qpos[:7].copy()
     mujoco.mj_forward(model, data)
     dt = 0.01
     command = np.zeros(12)

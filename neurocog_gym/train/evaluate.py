@@ -156,7 +156,13 @@ class GaitEvaluator:
     def _reset(self, genes: np.ndarray, seed: int) -> LocomotionGenerator:
         """The env's ``reset(seed=seed)`` (``QuadrupedEnv.reset_model``), for these genes."""
         m, d, r, p = self.model, self.data, self.robot, self.params
-        gen = LocomotionGenerator(self.base_gait.with_genes(genes), r.joint_lo, r.joint_hi, self.dt)
+        gen = LocomotionGenerator(
+            self.base_gait.with_genes(genes),
+            r.joint_lo,
+            r.joint_hi,
+            self.dt,
+            knee_behind=r.knee_behind,
+        )
         rng = np.random.default_rng(seed)
         mujoco.mj_resetData(m, d)
         qpos = r.home_qpos.copy()
@@ -165,7 +171,7 @@ class GaitEvaluator:
         d.qvel[:] = 0.0
         mujoco.mj_forward(m, d)
         gen.reset(rng, noise=p.cpg_noise)
-        d.ctrl[r.actuator] = gen.pools.q_ref
+        d.ctrl[r.actuator] = gen.pools.target
         return gen
 
     def evaluate(self, genes: np.ndarray, seed: int = 0) -> GaitScore:
@@ -202,7 +208,8 @@ class GaitEvaluator:
             self._weight_per_leg, cpg.x, cpg.v, cpg.W, cpg.V, cpg_consts, cp.substeps,
             _JOINT_NEURONS, gen.g_flex, gen.g_ext, pools.q_ref, pools.qd_ref, pools.posture,
             motor_consts, pools.acc_max, pools.vel_max, pools.fl_width, pools.Z, pools.q_lo,
-            pools.q_hi, pools.dt, np.zeros(12), cpg.y, p.cpg_bound,
+            pools.q_hi, pools.dt, np.zeros(12), cpg.y, p.cpg_bound, pools.coupling, pools.joint_lo,
+            pools.joint_hi, pools.target,
         )  # fmt: skip
         warn = d.warning.number
         n_warn = int(sum(warn[w] for w in FAULT_WARNINGS))

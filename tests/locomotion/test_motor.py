@@ -38,7 +38,8 @@ def _one_step(drive, interrupt, theta, theta_dot, touch, Z, mu1=1.0, mu2=1.0, k=
         q, qd, np.array([drive]), np.array([interrupt]), np.array([theta]), np.array([theta_dot]),
         np.asarray(touch, float), np.array([0.0]), mu1, mu2, np.array([100.0]), np.array([7.0]),
         np.array([1.4]), C, 1.0, 1.5, np.asarray(Z, float).reshape(1, -1), k, d,
-        np.array([-3.0]), np.array([3.0]), 0.01, acc,
+        np.array([-3.0]), np.array([3.0]), 0.01, acc, np.zeros(1), np.array([-3.0]),
+        np.array([3.0]), np.zeros(1),
     )  # fmt: skip
     return q[0], qd[0], acc[0]
 
