@@ -112,6 +112,12 @@ class TrotDesign:
     """C29, C34, C53, C58: neighbour inhibition (alternation)."""
     wb: float = 0.1982
     """C42, C45: diagonal flexor -| extensor inhibition (diagonal pairs together)."""
+    t_hf: float = 0.0
+    """S1, own touch sensor -> hip flexor (negative: a loaded foot holds its swing back)."""
+    t_he: float = 0.0
+    """S2, own touch sensor -> hip extensor (positive: a loaded foot pushes on)."""
+    t_kf: float = 0.0
+    """S3, own touch sensor -> knee flexor (negative: a loaded knee does not fold)."""
 
 
 def build(p: TrotDesign) -> Gait:
@@ -124,6 +130,7 @@ def build(p: TrotDesign) -> Gait:
     c.update({53: p.w, 58: p.w, 29: p.w, 34: p.w, 42: p.wb, 45: p.wb})  # trot
     for k, v in c.items():
         genes[k] = v
+    genes[65:68] = p.t_hf, p.t_he, p.t_kf  # S1, S2, S3: the load rule (body v2)
     front_posture = [p.ph, p.pk]
     hind_posture = [p.phh, p.pkh]
     return Gait(

@@ -5,12 +5,16 @@ Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers mult
 ``--seeds`` seeds, the first 2 s left out, and is kept when its cost is lower. Cost per seed:
 
 * 100 for a fall, plus 10 per second it fell short;
-* 10 x |speed - 0.5 m/s| (forward x displacement per second);
+* 10 (``--speed_weight``) x |speed - 0.5 m/s| (forward x displacement per second);
 * per leg: the median swing clearance below 3.2 cm or above 4.8 cm (per cm), half the amount by
   which its highest swing exceeds 5.8 cm;
 * |lateral drift| / 6 m;
 * 20 x the share of time both feet of one side are off the ground (a pace-like gait);
-* 0.3 x short touch-downs (contacts under 80 ms) per second.
+* 0.3 x short touch-downs (contacts under 80 ms) per second;
+* with ``--mismatch W``: W x the share of time a foot's contact disagrees with its CPG phase
+  (in the air while the CPG stands it, or down while it swings); with ``--swing S``: 30 per second
+  by which the median swing is shorter than S; with ``--hip_height H``: 100 per metre by which
+  the mean hip height falls short of H (all three used for body v2, off by default).
 
 Body v1's numbers came from four chained runs of this search (about 1,100 candidates): from the
 v0 numbers scaled to the longer legs (theta_dd_MAX x 0.55, tau_f x 1.3, knee synapses x 0.7,
@@ -38,7 +42,7 @@ from design_gait import TrotDesign, build  # noqa: E402
 from neurocog_gym.envs.walk import WalkEnv  # noqa: E402
 
 KEYS = ("hg", "hgh", "kf", "kfh", "keh", "tf", "am", "ph", "pk", "phh", "pkh", "kr")
-GENE_KEYS = ("ke", "c1", "ring", "ring2", "kk", "kk6", "w", "wb")
+GENE_KEYS = ("ke", "c1", "ring", "ring2", "kk", "kk6", "w", "wb", "t_hf", "t_he", "t_kf")
 """With ``--genes``: the CPG's synapse weights too (design_gait.py's docstring names them)."""
 
 
@@ -62,6 +66,20 @@ class Args:
     """Best design so far (written atomically whenever it improves)."""
     genes: bool = False
     """Perturb the CPG weights of ``GENE_KEYS`` as well."""
+    mismatch: float = 0.0
+    """Weight of the contact/CPG mismatch: per leg, the share of time its foot is in the air
+    (sole above 4 mm) while its CPG stands or on the ground while it swings (0: not used)."""
+    swing: float = 0.0
+    """Shortest wanted median swing (sole above 4 mm), s; 30 per second short (0: not used)."""
+    speed_weight: float = 10.0
+    """Cost per m/s of speed error."""
+    hip_height: float = 0.0
+    """Lowest wanted mean hip height while walking, m; 100 per metre below it (0: not used)."""
+    cma: bool = False
+    """Search with CMA-ES (the ``cma`` package) instead: ``--iters`` evaluations in all, the
+    numbers moved relatively (``--sigma``), near-zero ones absolutely."""
+    workers: int = 1
+    """Processes evaluating a CMA-ES generation."""
 
 
 def walk_stats(design: TrotDesign, seed: int, seconds: float) -> dict:
@@ -70,9 +88,11 @@ def walk_stats(design: TrotDesign, seed: int, seconds: float) -> dict:
     env.reset(seed=seed)
     r = env.robot
     radius = env.model.geom_size[r.foot_geom, 0]
-    xs, feet, touch, fell = [], [], [], False
+    xs, feet, touch, cpg, hips, fell = [], [], [], [], [], False
     for _ in range(int(seconds / env.dt)):
         _, _, term, trunc, _ = env.step(np.zeros(15))
+        cpg.append(env.generator.swinging.copy())
+        hips.append(env.data.xpos[r.thigh_body, 2].mean())
         xs.append(env.data.qpos[:2].copy())
         feet.append(env.data.site_xpos[r.foot_site][:, 2] - radius)
         touch.append(env.touch() > 0.05)
@@ -99,6 +119,14 @@ def walk_stats(design: TrotDesign, seed: int, seconds: float) -> dict:
         top.append(float(np.max(peaks)) if peaks else 0.0)
     o = on[n0:]
     side = float(((~o[:, 0] & ~o[:, 2]) | (~o[:, 1] & ~o[:, 3])).mean())
+    air = feet[n0:] > 0.004
+    mismatch = float((air != np.array(cpg)[n0:]).mean())
+    swings = []
+    for leg in range(4):
+        edges = np.flatnonzero(np.diff(air[:, leg].astype(int)))
+        swings += [b - a for a, b in zip(edges[:-1], edges[1:], strict=False)
+                   if air[a + 1, leg] and b - a >= 5]  # fmt: skip
+    swing = float(np.median(swings)) * env.dt if swings else 0.0
     short = 0
     for leg in range(4):
         run = 0
@@ -110,10 +138,19 @@ def walk_stats(design: TrotDesign, seed: int, seconds: float) -> dict:
                 run = 0
     return {"fell": fell, "t": len(xs) * env.dt, "speed": (xs[-1, 0] - xs[n0, 0]) / span,
             "clear": med, "top": top, "drift": float(xs[-1, 1] - xs[0, 1]), "side": side,
-            "short": short / span}  # fmt: skip
+            "short": short / span, "mismatch": mismatch, "swing": swing,
+            "hip_height": float(np.mean(hips[n0:]))}  # fmt: skip
 
 
-def cost(design: TrotDesign, seeds: int, seconds: float) -> float:
+def cost(
+    design: TrotDesign,
+    seeds: int,
+    seconds: float,
+    mismatch: float = 0.0,
+    swing: float = 0.0,
+    speed_weight: float = 10.0,
+    hip_height: float = 0.0,
+) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
     for seed in range(seeds):
@@ -122,12 +159,52 @@ def cost(design: TrotDesign, seeds: int, seconds: float) -> float:
             c += 100.0 + 10.0 * (seconds - s["t"])
             if "speed" not in s:
                 continue
-        c += 10.0 * abs(s["speed"] - 0.5)
+        c += speed_weight * abs(s["speed"] - 0.5)
         for med, top in zip(s["clear"], s["top"], strict=True):
             c += 100 * max(0.0, 0.032 - med) + 100 * max(0.0, med - 0.048)
             c += 50 * max(0.0, top - 0.058)
         c += abs(s["drift"]) / 6.0 + 20.0 * s["side"] + 0.3 * s["short"]
+        c += mismatch * s["mismatch"] + 30.0 * max(0.0, swing - s["swing"])
+        c += 100.0 * max(0.0, hip_height - s["hip_height"])
     return c
+
+
+def _cma_cost(job) -> float:
+    design, seeds, seconds, extra = job
+    return cost(design, seeds, seconds, **extra)
+
+
+def _cma_search(args: Args, start: TrotDesign, keys, extra: dict) -> None:
+    """CMA-ES over ``keys`` around ``start``; the best design is written after each generation."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    import cma
+
+    from neurocog_gym import io as nio
+
+    base = np.array([getattr(start, k) for k in keys], dtype=float)
+    rel = np.abs(base) > 0.05
+
+    def design(x):
+        v = np.where(rel, base * (1.0 + x), base + x)
+        return dataclasses.replace(start, **{k: float(a) for k, a in zip(keys, v, strict=True)})
+
+    es = cma.CMAEvolutionStrategy(np.zeros(len(keys)), args.sigma,
+                                  {"seed": args.rng + 1, "verbose": -9})  # fmt: skip
+    best, best_cost, n = start, cost(start, args.seeds, args.seconds, **extra), 0
+    print(f"start: cost {best_cost:.3f}", flush=True)
+    with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
+        while n < args.iters and not es.stop():
+            xs = es.ask()
+            jobs = [(design(x), args.seeds, args.seconds, extra) for x in xs]
+            costs = list(pool.map(_cma_cost, jobs))
+            es.tell(xs, costs)
+            n += len(xs)
+            k = int(np.argmin(costs))
+            if costs[k] < best_cost:
+                best, best_cost = jobs[k][0], costs[k]
+                nio.atomic_write_text(args.out, json.dumps(dataclasses.asdict(best), indent=1))
+            print(f"{n}: generation best {min(costs):.3f}, best {best_cost:.3f}", flush=True)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -144,11 +221,16 @@ def main(argv: list[str] | None = None) -> None:
     if args.start:
         best = dataclasses.replace(best, **json.loads(Path(args.start).read_text()))
     rng = np.random.default_rng(args.rng)
-    best_cost = cost(best, args.seeds, args.seconds)
+    extra = {"mismatch": args.mismatch, "swing": args.swing, "speed_weight": args.speed_weight,
+             "hip_height": args.hip_height}  # fmt: skip
+    best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
 
     keys = KEYS + GENE_KEYS if args.genes else KEYS
+    if args.cma:
+        _cma_search(args, best, keys, extra)
+        return
     for it in range(args.iters):
         changes = {}
         for k in rng.choice(keys, size=int(rng.integers(1, 3)), replace=False):
@@ -157,7 +239,7 @@ def main(argv: list[str] | None = None) -> None:
             step = rng.normal(0.0, args.sigma)
             changes[str(k)] = v * (1.0 + step) if abs(v) > 0.05 else v + step
         cand = dataclasses.replace(best, **changes)
-        c = cost(cand, args.seeds, args.seconds)
+        c = cost(cand, args.seeds, args.seconds, **extra)
         if c < best_cost:
             best, best_cost = cand, c
             print(f"{it}: cost {c:.3f} {changes}", flush=True)
