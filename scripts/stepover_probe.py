@@ -1,81 +1,234 @@
-"""The isolated step-over probe of docs/oracle_notes.md: can body v1's front leg clear a block?
+"""The isolated step-over probe of docs/oracle_notes.md: can a front leg clear a block cleanly?
 
-On ``NeuroCog/Walk-v1`` (trotting, no obstacle env), a block is placed 20 ms before a front-left
-lift-off with its near face ``gap`` ahead of the FL sole, centred on the FL lane (20 cm wide);
-from the lift-off the FL leg runs the oracle's primitive (lift: hip +0.3, knee +1 until the sole
-is 3 cm above the top; carry: hip -1, knee +0.5, +1 whenever the sole sinks within 1.5 cm of the
-top, until the sole is 3 cm past the far face; then released). Prints, per case, which robot
-geoms touched the block and where the foot ended relative to the far face.
+On ``NeuroCog/Walk-v1`` (trotting, no obstacle env), a block (20 cm wide, centred on the FL
+lane) is placed at a front-left lift-off with its near face ``gap`` ahead of the FL sole; from
+the lift-off the FL leg runs a scripted step-over, the other legs walk on. Prints, per case,
+the first FL geom that touched the block (and when), where the FL foot ended relative to the
+far face, and whether the torso stayed upright. The simulator is read directly: a probe of the
+body, not a policy.
 
-    python scripts/stepover_probe.py [--seeds 2]
+Primitives (``--primitive``):
+
+* ``interrupt`` (body v1's, as the v1 oracle): lift (hip +0.3, knee +1) until the sole is 3 cm
+  above the top; carry (hip -1, knee +0.5, +1 whenever the sole sinks within 1.5 cm of the top)
+  until the sole is 3 cm past the far face; release.
+* ``box``: the foot tracks a box-shaped path fixed to the block (straight up for ``--t_lift`` to
+  ``--apex`` above the top, forwards for ``--t_carry`` to ``--land`` past the far face, down for
+  ``--t_drop``, then ``--t_stand`` holding the foot down with the leg stretched to the hip height
+  ``--hip_h``); each cycle the path point, taken into the hip's frame, is turned into the leg's
+  pool angles by two-segment inverse kinematics, and the interrupts are a PD law on them
+  (``--kp``, ``--kd``, clipped to [-1, 1]).
+
+Bodies (``--body``): ``v1`` (the shipped assets) or ``knee-behind``
+(``neurocog_gym.robot.variants.knee_behind``, with ``--gait``, a ``TrotDesign`` JSON, e.g.
+``docs/data/gait_knee_behind_candidate.json``).
+
+    python scripts/stepover_probe.py [--seeds 2] [--body knee-behind --gait G.json]
+        [--primitive box]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import sys
+import tempfile
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
-import neurocog_gym  # noqa: F401  (registers the env ids)
-from neurocog_gym.bench.body import _lift_offs
-from neurocog_gym.robot.obstacles import Block, ObstaclePool
+L, R_FOOT = 0.20, 0.018
+"""Segment length and sole radius, m (assets/quadruped.xml)."""
 
 
-def probe(seed: int, gap: float, height: float, length: float) -> dict:
-    lifts, _ = _lift_offs(gym, "NeuroCog/Walk-v1", seed, 0, 2.0, 1)
+@dataclass(frozen=True)
+class Args:
+    """Command-line arguments."""
+
+    seeds: int = 2
+    """Walking seeds (each runs every block case)."""
+    body: str = "v1"
+    """'v1' or 'knee-behind'."""
+    gait: str = ""
+    """TrotDesign JSON for the gait ('' = the shipped gait)."""
+    primitive: str = "interrupt"
+    """'interrupt' or 'box' (module docstring)."""
+    apex: float = 0.04
+    """box: sole above the block's top while carried, m."""
+    land: float = 0.08
+    """box: sole past the far face at touch-down, m."""
+    t_lift: float = 0.09
+    """box: rise time, s."""
+    t_carry: float = 0.16
+    """box: carry time, s."""
+    t_drop: float = 0.07
+    """box: descent time, s."""
+    t_stand: float = 0.08
+    """box: time the landed leg is held stretched, s."""
+    hip_h: float = 0.32
+    """box: hip height the landed leg stretches to, m."""
+    kp: float = 10.0
+    """box: interrupt per rad of pool-angle error."""
+    kd: float = 0.15
+    """box: interrupt per rad/s."""
+
+
+def leg_ik(dx: float, dz: float) -> tuple[float, float]:
+    """Pool angles (hip, knee) of a two-segment leg for a foot at (dx ahead, dz up) of the hip.
+
+    In pool coordinates (``locomotion.motor.leg_coordinates``) the foot's direction from the hip
+    is -(hip + knee / 2) from straight down (a positive hip swings it back) for either knee
+    direction; out-of-reach points are pulled in to the leg's full length.
+    """
+    d = min(float(np.hypot(dx, dz)), 2 * L - 1e-3)
+    knee = 2.0 * np.arccos(d / (2 * L))
+    return float(-np.arctan2(dx, -dz) - knee / 2), float(knee)
+
+
+def _lift_off(gym, seed: int, settle: float = 2.0) -> float:
+    """Time of FL's first lift-off after ``settle`` s (sole leaving 4 mm) during a CPG swing."""
     env = gym.make("NeuroCog/Walk-v1")
     env.reset(seed=seed)
     u = env.unwrapped
-    m, d = u.model, u.data
-    pool = ObstaclePool(m)
-    a = np.zeros(15)
-    while d.time < lifts[0] - 0.02 - 1e-9:
-        env.step(a)
-    foot = d.site_xpos[u.robot.foot_site[0]].copy()
-    near = foot[0] + 0.018 + gap
-    pool.place(m, d, [Block(near + length / 2, foot[1], length, 0.20, height, 0.0)])
-    block, robot = int(pool.geom_ids[0]), {int(g) for g in u.robot.robot_geoms}
-    state, hit = 0, set()
-    for _ in range(80):
-        sole = d.site_xpos[u.robot.foot_site[0], 2] - 0.018
-        fx = d.site_xpos[u.robot.foot_site[0], 0]
-        if state == 0 and d.time >= lifts[0] - 1e-9:
-            state = 1
-        a[:] = 0.0
-        if state == 1:
-            a[1], a[2] = 0.3, 1.0
-            if sole > height + 0.03:
-                state = 2
-        elif state == 2:
-            a[1], a[2] = -1.0, (1.0 if sole < height + 0.015 else 0.5)
-            if fx - 0.018 > near + length + 0.03:
-                state = 3
-        env.step(a)
-        for i in range(d.ncon):
-            c = d.contact[i]
-            if block in (c.geom1, c.geom2):
-                other = c.geom2 if c.geom1 == block else c.geom1
-                if other in robot:
-                    hit.add(m.geom(other).name)
-    beyond = float(d.site_xpos[u.robot.foot_site[0], 0] - (near + length))
+    was_down = True
+    while u.data.time < settle + 3.0:
+        down = u.data.site_xpos[u.robot.foot_site[0], 2] - R_FOOT < 0.004
+        if u.data.time > settle and was_down and not down and u.generator.swinging[0]:
+            env.close()
+            return float(u.data.time)
+        was_down = down
+        env.step(np.zeros(15))
     env.close()
-    return {"touched_by": sorted(hit), "foot_past_far_face_m": round(beyond, 3)}
+    raise RuntimeError(f"seed {seed}: no FL lift-off within {settle + 3.0} s")
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=2)
-    args = ap.parse_args()
-    print("| seed | gap, cm | height, cm | length, cm | touched by | foot past far face, cm |")
-    print("|---|---|---|---|---|---|")
-    for seed in range(args.seeds):
-        for gap in (0.02, 0.04, 0.06, 0.08):
-            for h, length in ((0.06, 0.08), (0.08, 0.08), (0.08, 0.12)):
-                r = probe(seed, gap, h, length)
+def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
+    """One step-over; returns the first FL contact, the foot past the far face and uprightness."""
+    import gymnasium as gym
+
+    from neurocog_gym.robot.obstacles import Block, ObstaclePool
+
+    t_lift = _lift_off(gym, seed)
+    env = gym.make("NeuroCog/Walk-v1")
+    env.reset(seed=seed)
+    u = env.unwrapped
+    m, d, r = u.model, u.data, u.robot
+    pool = ObstaclePool(m)
+    act = np.zeros(15)
+    while d.time < t_lift - 1e-9:
+        env.step(act)
+    foot0 = d.site_xpos[r.foot_site[0]].copy()
+    near = foot0[0] + R_FOOT + gap
+    far = near + length
+    pool.place(m, d, [Block(near + length / 2, foot0[1], length, 0.20, height, 0.0)])
+    block = int(pool.geom_ids[0])
+    fl_geoms = {int(g) for g in r.robot_geoms if m.geom(int(g)).name.startswith("FL")}
+    z_apex, x_land = height + R_FOOT + a.apex, far + R_FOOT + a.land
+    t_path = a.t_lift + a.t_carry + a.t_drop
+    state, first = 1, None
+    for _ in range(90):
+        t = d.time - t_lift
+        sole = d.site_xpos[r.foot_site[0], 2] - R_FOOT
+        fx = d.site_xpos[r.foot_site[0], 0]
+        act[:] = 0.0
+        if a.primitive == "interrupt" and state:
+            if state == 1:
+                act[1], act[2] = 0.3, 1.0
+                state = 2 if sole > height + 0.03 else 1
+            elif state == 2:
+                act[1], act[2] = -1.0, (1.0 if sole < height + 0.015 else 0.5)
+                state = 0 if fx - R_FOOT > far + 0.03 else 2
+        elif a.primitive == "box" and t < t_path + a.t_stand:
+            if t < a.t_lift:
+                px, pz = foot0[0], R_FOOT + (z_apex - R_FOOT) * t / a.t_lift
+            elif t < a.t_lift + a.t_carry:
+                px, pz = foot0[0] + (x_land - foot0[0]) * (t - a.t_lift) / a.t_carry, z_apex
+            else:
+                px = x_land
+                pz = max(R_FOOT, z_apex - (z_apex - R_FOOT) * (t - a.t_lift - a.t_carry) / a.t_drop)
+            rot = d.xmat[r.torso_body].reshape(3, 3)
+            rel = rot.T @ (np.array([px, foot0[1], pz]) - d.xpos[r.thigh_body[0]])
+            if pz <= R_FOOT + 1e-9:
+                rel[2] = min(rel[2], -(a.hip_h - R_FOOT))  # stand: stretch to the hip height
+            want = leg_ik(rel[0], rel[2])
+            q, qd = d.qpos[r.qpos_adr], d.qvel[r.dof_adr]
+            c = 1.0 if r.knee_behind[0] else 0.0  # pool hip = hip - knee on a knee-behind leg
+            have = (q[1] - c * q[2], q[2])
+            rate = (qd[1] - c * qd[2], qd[2])
+            for j in range(2):
+                act[1 + j] = np.clip(a.kp * (want[j] - have[j]) - a.kd * rate[j], -1.0, 1.0)
+        env.step(act)
+        for i in range(d.ncon):
+            con = d.contact[i]
+            if first is None and block in (con.geom1, con.geom2):
+                other = con.geom2 if con.geom1 == block else con.geom1
+                if other in fl_geoms:
+                    first = (m.geom(other).name, round(float(d.time - t_lift), 2))
+    beyond = float(d.site_xpos[r.foot_site[0], 0] - far)
+    for _ in range(60):
+        env.step(np.zeros(15))
+    upright = bool(d.xmat[r.torso_body][8] > 0.5)
+    env.close()
+    return {"first_touch": first, "past_far_face_m": round(beyond, 3), "upright": upright}
+
+
+def _prepare_body(a: Args) -> None:
+    """Point ``NEUROCOG_ASSETS`` at a temporary assets directory for the chosen body and gait."""
+    if a.body == "v1" and not a.gait:
+        return
+    from neurocog_gym.robot.variants import knee_behind, write_assets
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from design_gait import TrotDesign, build
+
+    out = Path(tempfile.mkdtemp(prefix="neurocog_probe_"))
+    if a.body == "knee-behind":
+        write_assets(knee_behind(), out)
+    else:
+        import shutil
+
+        from neurocog_gym import paths
+
+        shutil.copytree(paths.assets_dir(), out, dirs_exist_ok=True)
+    if a.gait:
+        design = replace(TrotDesign(), **json.loads(Path(a.gait).read_text()))
+        build(design).save(out / "default_gait.json")
+    os.environ["NEUROCOG_ASSETS"] = str(out)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    for f in fields(Args):
+        parser.add_argument(f"--{f.name}", type=type(f.default), default=f.default)
+    a = Args(**vars(parser.parse_args(argv)))
+    if a.body not in ("v1", "knee-behind"):
+        parser.error(f"--body must be 'v1' or 'knee-behind', got {a.body!r}")
+    if a.primitive not in ("interrupt", "box"):
+        parser.error(f"--primitive must be 'interrupt' or 'box', got {a.primitive!r}")
+    if a.seeds < 1:
+        parser.error("--seeds must be >= 1")
+    _prepare_body(a)
+    import neurocog_gym  # noqa: F401  (registers the env ids, after the assets are chosen)
+
+    print("| seed | gap, cm | height, cm | length, cm | first FL touch (s after lift-off) | "
+          "foot past far face, cm | upright |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|")
+    clean = n = 0
+    for seed in range(a.seeds):
+        for gap in (0.02, 0.04, 0.06):
+            for h, length in ((0.06, 0.05), (0.08, 0.08), (0.08, 0.12)):
+                res = probe(a, seed, gap, h, length)
+                touch = res["first_touch"]
+                up = "yes" if res["upright"] else "no"
+                ok = touch is None and res["past_far_face_m"] > 0 and res["upright"]
+                clean += ok
+                n += 1
                 print(f"| {seed} | {gap * 100:.0f} | {h * 100:.0f} | {length * 100:.0f} | "
-                      f"{', '.join(r['touched_by']) or '-'} | "
-                      f"{r['foot_past_far_face_m'] * 100:.1f} |")  # fmt: skip
+                      f"{'-' if touch is None else f'{touch[0]} ({touch[1]:.2f})'} | "
+                      f"{res['past_far_face_m'] * 100:.1f} | {up} |")  # fmt: skip
+    print(f"\nclean FL step-overs (no FL touch, foot past the far face, upright): {clean} / {n}")
 
 
 if __name__ == "__main__":
