@@ -187,11 +187,11 @@ def _prepare_body(a: Args) -> None:
     if a.body == "knee-behind":
         write_assets(knee_behind(), out)
     else:
-        import shutil
+        import mujoco
 
         from neurocog_gym import paths
 
-        shutil.copytree(paths.assets_dir(), out, dirs_exist_ok=True)
+        write_assets(mujoco.MjSpec.from_file(str(paths.asset(paths.SCENE_XML))), out)
     if a.gait:
         design = replace(TrotDesign(), **json.loads(Path(a.gait).read_text()))
         build(design).save(out / "default_gait.json")

@@ -17,6 +17,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from neurocog_gym import io as nio
 from neurocog_gym import paths
 from neurocog_gym.robot import names
 
@@ -56,16 +57,16 @@ def knee_behind(scene: str | Path | None = None) -> mujoco.MjSpec:
 def write_assets(spec: mujoco.MjSpec, out: str | Path) -> Path:
     """Write a whole assets directory for ``spec`` (use it with ``NEUROCOG_ASSETS=out``).
 
-    The shipped files are copied and ``scene.xml`` is replaced by the spec, compiled into one
-    file (the robot included).
+    The shipped files are copied (each written atomically) and ``scene.xml`` is replaced by the
+    spec, compiled into one file (the robot included).
     """
-    import shutil
-
     out = Path(out)
     src = paths.assets_dir()
     if out.resolve() == src.resolve():
         raise ValueError(f"refusing to overwrite the shipped assets in {src}")
-    shutil.copytree(src, out, dirs_exist_ok=True)
+    for f in src.rglob("*"):
+        if f.is_file():
+            nio.atomic_write_bytes(out / f.relative_to(src), f.read_bytes())
     spec.compile()
-    (out / paths.SCENE_XML).write_text(spec.to_xml())
+    nio.atomic_write_text(out / paths.SCENE_XML, spec.to_xml())
     return out
