@@ -11,7 +11,7 @@ Primitives (``--primitive``):
 
 * ``interrupt`` (body v1's, as the v1 oracle): lift (hip +0.3, knee +1) until the sole is 3 cm
   above the top; carry (hip -1, knee +0.5, +1 whenever the sole sinks within 1.5 cm of the top)
-  until the sole is 3 cm past the far face; release.
+  until the sole is ``--beyond`` (3 cm) past the far face; release.
 * ``box``: the foot tracks a box-shaped path fixed to the block (straight up for ``--t_lift`` to
   ``--apex`` above the top, forwards for ``--t_carry`` to ``--land`` past the far face, down for
   ``--t_drop``, then ``--t_stand`` holding the foot down with the leg stretched to the hip height
@@ -55,6 +55,8 @@ class Args:
     """TrotDesign JSON for the gait ('' = the shipped gait)."""
     primitive: str = "interrupt"
     """'interrupt' or 'box' (module docstring)."""
+    beyond: float = 0.03
+    """interrupt: sole past the far face before the leg is released, m."""
     apex: float = 0.04
     """box: sole above the block's top while carried, m."""
     land: float = 0.08
@@ -139,7 +141,7 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
                 state = 2 if sole > height + 0.03 else 1
             elif state == 2:
                 act[1], act[2] = -1.0, (1.0 if sole < height + 0.015 else 0.5)
-                state = 0 if fx - R_FOOT > far + 0.03 else 2
+                state = 0 if fx - R_FOOT > far + a.beyond else 2
         elif a.primitive == "box" and t < t_path + a.t_stand:
             if t < a.t_lift:
                 px, pz = foot0[0], R_FOOT + (z_apex - R_FOOT) * t / a.t_lift
