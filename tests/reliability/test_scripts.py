@@ -1,4 +1,4 @@
-"""The soak and NSGA-candidate scripts end to end on tiny budgets (subprocess)."""
+"""The soak, gait-search and body-figure scripts end to end on tiny budgets (subprocess)."""
 
 import json
 import subprocess
@@ -26,41 +26,6 @@ def test_soak_script_and_report(tmp_path):
     _script("soak.py", "--report", js, "--out", md)
     text = md.read_text()
     assert "| NeuroCog/Walk-v1 | 1,500 (1,500) |" in text and "growth" in text
-
-
-def test_nsga_candidates_script(tmp_path):
-    from neurocog_gym.train.evaluate import EvalParams
-    from neurocog_gym.train.nsga import NSGAConfig, tune_cpg
-
-    run = tmp_path / "run"
-    cfg = NSGAConfig(pop_size=4, generations=1, seed=0, eval=EvalParams(seconds=0.3))
-    tune_cpg(run, cfg, workers=1, plots=False, progress=False)
-    _script("nsga_candidates.py", run, "--seconds", "2.5", "--seeds", "0", "1",
-            "--env-check", "1")  # fmt: skip
-    c = json.loads((run / "candidates.json").read_text())
-    assert c["n_solutions"] >= 1 and len(c["table"]) == c["n_solutions"]
-    assert c["reference_env"] and all("drift_per_10m" in r for r in c["reference_env"])
-    # A candidate is written only when one meets every rule; never over the shipped default.
-    assert (run / "candidate_gait.json").exists() == (c["winner"] is not None)
-
-
-def test_recheck_trials_finds_a_changed_record(tmp_path):
-    from neurocog_gym.bench.runner import BenchConfig, run_benchmark
-
-    run = tmp_path / "run"
-    run_benchmark(BenchConfig(scenarios=("static",), trials=2, policy="blind", max_seconds=0.3,
-                              workers=1, out=run, progress=False))  # fmt: skip
-    res = _script("recheck_trials.py", run, "--scenario", "static", "--every", "1")
-    assert "2 of 2 re-run trials identical" in res.stdout
-    # A record that the code does not reproduce is reported, with a failing exit status.
-    trials = run / "trials.jsonl"
-    rows = [json.loads(line) for line in trials.read_text().splitlines()]
-    rows[1]["steps"] += 1
-    trials.write_text("".join(json.dumps(r) + "\n" for r in rows))
-    res = subprocess.run([sys.executable, str(ROOT / "scripts" / "recheck_trials.py"), str(run),
-                          "--every", "1"], capture_output=True, text=True, cwd=ROOT)  # fmt: skip
-    assert res.returncode == 1
-    assert "DIFF" in res.stdout and "'steps'" in res.stdout and "1 of 2 re-run" in res.stdout
 
 
 def test_search_gait_script_scores_and_writes_only_improvements(tmp_path):
