@@ -27,23 +27,24 @@ ENV_IDS: tuple[str, ...] = (
 )
 
 # vector_entry_point: ``gymnasium.make_vec(id, n)`` (mode None or "vector_entry_point") gives a
-# SpinVectorEnv (neurocog_gym/vector.py): the sync mode's sub-envs, stepped in parallel processes
-# that wait for each other by spinning on shared memory (docs/benchmarks_env.md says why).
+# SpinVectorEnv (neurocog_gym/envs/vector.py): the sync mode's sub-envs, stepped in parallel
+# processes that wait for each other by spinning on shared memory (docs/benchmarks_env.md says
+# why).
 register(
     id="NeuroCog/Walk-v1",
     entry_point="neurocog_gym.envs.walk:WalkEnv",
-    vector_entry_point="neurocog_gym.vector:walk_vector",
+    vector_entry_point="neurocog_gym.envs.vector:walk_vector",
     max_episode_steps=2000,
 )
 register(
     id="NeuroCog/SuddenObstacle-v1",
     entry_point="neurocog_gym.envs.sudden:SuddenObstacleEnv",
-    vector_entry_point="neurocog_gym.vector:sudden_obstacle_vector",
+    vector_entry_point="neurocog_gym.envs.vector:sudden_obstacle_vector",
     max_episode_steps=700,
 )
 register(
     id="NeuroCog/StaticObstacle-v1",
     entry_point="neurocog_gym.envs.static:StaticObstacleEnv",
-    vector_entry_point="neurocog_gym.vector:static_obstacle_vector",
+    vector_entry_point="neurocog_gym.envs.vector:static_obstacle_vector",
     max_episode_steps=1000,
 )

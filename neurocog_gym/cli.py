@@ -171,7 +171,7 @@ def _cmd_info(args) -> int:
     import json
 
     import neurocog_gym
-    from neurocog_gym.catalog import describe, format_text
+    from neurocog_gym.envs.catalog import describe, format_text
 
     ids = [args.env] if args.env else list(neurocog_gym.ENV_IDS)
     descs = [describe(i) for i in ids]

@@ -232,7 +232,7 @@ def part_env(args: Args) -> tuple[list[str], float]:
         f"| {rate['sudden_full']:,.0f} | {rate['sudden_full'] * dt:.2f} | | >= 100 steps/s "
         f"| {'yes' if rate['sudden_full'] >= 100 else 'no'} |",
         f"| `gymnasium.make_vec({SUDDEN!r}, 2)`: the registered vector entry point, "
-        f"`{spin_class}` (neurocog_gym/vector.py) | {rate['vec_spin_2']:,.0f} "
+        f"`{spin_class}` (neurocog_gym/envs/vector.py) | {rate['vec_spin_2']:,.0f} "
         f"| {rate['vec_spin_2'] * dt:.1f} | {r_spin:.2f}x 1 env ({p_spin:.2f}x paired, rounds "
         f"{lo_spin:.2f}-{hi_spin:.2f}) | >= 1.6x | {'yes' if r_spin >= 1.6 else 'no'} |",
         f"| `gymnasium.make_vec({SUDDEN!r}, 2, 'async')`: Gymnasium's `AsyncVectorEnv` "
@@ -323,7 +323,7 @@ class _Replay(gym.Env):
 def _replay_rows(times: list[float], n: int) -> tuple[dict, list]:
     """Timing rows: the replay stand-in alone, two of it under ``AsyncVectorEnv`` and two under
     ``SpinVectorEnv`` (the second stand-in replays from the middle of the record)."""
-    from neurocog_gym.vector import SpinVectorEnv
+    from neurocog_gym.envs.vector import SpinVectorEnv
 
     solo = _Replay(times)
     zero1 = np.zeros(15, np.float32)
@@ -687,7 +687,7 @@ def part_ppo(args: Args) -> list[str]:
         "|---|---|---:|---|---:|",
         f"| `{SUDDEN}` | MultiInputPolicy | {med[SUDDEN]:,.0f} | "
         f"{', '.join(f'{x:,.0f}' for x in rates[SUDDEN])} | {med[SUDDEN] / med['Ant-v5']:.2f}x |",
-        f"| `{SUDDEN}`, `--vec spin` (neurocog_gym.sb3_vec.SpinVecEnv) | MultiInputPolicy "
+        f"| `{SUDDEN}`, `--vec spin` (neurocog_gym.envs.sb3_vec.SpinVecEnv) | MultiInputPolicy "
         f"| {med['spin']:,.0f} | {', '.join(f'{x:,.0f}' for x in rates['spin'])} "
         f"| {med['spin'] / med['Ant-v5']:.2f}x ({med['spin'] / med[SUDDEN]:.2f}x SubprocVecEnv, "
         f"{med['spin'] / med['one']:.2f}x one env) |",

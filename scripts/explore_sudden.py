@@ -15,7 +15,7 @@ Research scratch (not part of the package). Policies are objects with ``reset(en
 
 Best candidate: ``back-best`` = ``BackAround(**BEST)`` (reverse the trot, side-step out of the
 block's lane, walk past; never step over), which the package ships as
-``neurocog_gym.avoid.AvoidPolicy`` (``--policy avoid``). Results and the reasons the step-over
+``neurocog_gym.policies.AvoidPolicy`` (``--policy avoid``). Results and the reasons the step-over
 candidates (StepOver, HighArc, Hover) fail: ``docs/avoid_notes.md``.
 """
 
@@ -936,7 +936,7 @@ register("back-best")(lambda **kw: BackAround(**{**BEST, **kw}))
 
 
 class Avoid:
-    """The shipped reflex, ``neurocog_gym.avoid.AvoidPolicy``, with ``AvoidParams`` overrides.
+    """The shipped reflex, ``neurocog_gym.policies.AvoidPolicy``, with ``AvoidParams`` overrides.
 
     Keys of ``GUARD`` select the back-off variants of the 2026-11-27 session (all worse on the dev
     set, ``docs/avoid_notes.md``): they change only the ``reverse`` state's interrupts of the legs
@@ -946,7 +946,7 @@ class Avoid:
     name = "avoid"
 
     def __init__(self, **kw):
-        from neurocog_gym.avoid import AvoidParams
+        from neurocog_gym.policies.avoid import AvoidParams
 
         guard = {k: kw.pop(k) for k in list(kw) if k in GUARD}
         self.p = _avoid_variant()(AvoidParams(**kw), {**GUARD, **guard})
@@ -976,7 +976,7 @@ GUARD = dict(
 
 
 def _avoid_variant():
-    from neurocog_gym.avoid import _HIPS, _KNEES, AvoidPolicy
+    from neurocog_gym.policies.avoid import _HIPS, _KNEES, AvoidPolicy
 
     class AvoidVariant(AvoidPolicy):
         def __init__(self, params, g):

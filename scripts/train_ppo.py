@@ -58,7 +58,7 @@ class Args:
     """Parallel envs."""
     vec: str = "spin"
     """spin (env 0 in this process, the others in spinning shared-memory workers:
-    neurocog_gym.sb3_vec.SpinVecEnv; 1.64x SubprocVecEnv's PPO steps/s here,
+    neurocog_gym.envs.sb3_vec.SpinVecEnv; 1.64x SubprocVecEnv's PPO steps/s here,
     docs/benchmarks_ppo.md), subproc (one process per env, SB3's SubprocVecEnv) or dummy (all in
     this process)."""
     seed: int = 0
@@ -187,7 +187,7 @@ def _make_vec_env(args: Args):
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    from neurocog_gym.sb3_vec import SpinVecEnv
+    from neurocog_gym.envs.sb3_vec import SpinVecEnv
 
     cls = {"subproc": SubprocVecEnv, "spin": SpinVecEnv}.get(args.vec, DummyVecEnv)
     if args.n_envs == 1:

@@ -1,10 +1,15 @@
-"""The package's module import graph has no cycles (STYLE.md: data flows one way).
+"""The package's module import graph has no cycles and flows one way (STYLE.md: layout).
 
 Imports are read with ``ast`` from every module of ``neurocog_gym``, wherever they stand (a
 function-level import closes a circle as surely as a top-level one), relative imports resolved.
 An edge goes to the module named: ``from a.b import c`` reaches ``a.b.c`` if that is a module,
 else ``a.b``. Parent packages a submodule import runs implicitly are not edges, or every module
 would reach ``neurocog_gym/__init__.py`` and back.
+
+Stages, in the order the data flows (issue 25): the shared utilities (the package root, ``io``,
+``paths``), then robot -> perception -> locomotion -> envs -> policies -> train / bench, then
+the entry points (``cli``, ``demo``, ``video``). A module may import its own stage or a lower
+one, never a higher one; train and bench, side by side at one stage, import neither the other.
 """
 
 import ast
@@ -15,11 +20,27 @@ PACKAGE = "neurocog_gym"
 
 # Cycles that are known and scheduled for removal, each as the sorted tuple of its modules.
 # Any cycle not listed here fails the test, and so does a listed one that no longer exists.
-KNOWN_CYCLES = {
-    # issue 22 / issue 25: the avoid reflex and the policy registry import each other; the
-    # policies/ subpackage of issue 25 removes this.
-    ("neurocog_gym.avoid", "neurocog_gym.policies"),
+KNOWN_CYCLES: set[tuple[str, ...]] = set()
+
+# The stage of each top-level module or subpackage of the package ("" is the package root).
+# A new one fails test_every_module_has_a_stage until it is placed here.
+STAGES = {
+    "": 0,
+    "io": 0,
+    "paths": 0,
+    "robot": 1,
+    "perception": 2,
+    "locomotion": 3,
+    "envs": 4,
+    "policies": 5,
+    "train": 6,
+    "bench": 6,
+    "cli": 7,
+    "demo": 7,
+    "video": 7,
 }
+TOP = max(STAGES.values())
+"""The entry points' stage, whose modules may import each other (the CLI runs the demo)."""
 
 
 def _modules() -> dict[str, Path]:
@@ -129,6 +150,29 @@ def _cycle_in(graph: dict[str, set[str]], comp: set[str]) -> list[str]:
     raise AssertionError(f"no cycle through {start} in {sorted(comp)}")
 
 
+def group(module: str) -> str:
+    """The top-level module or subpackage ``module`` belongs to ("" for the package root)."""
+    parts = module.split(".")
+    assert parts[0] == PACKAGE, module
+    return parts[1] if len(parts) > 1 else ""
+
+
+def upward_imports(graph: dict[str, set[str]], stages: dict[str, int]) -> list[str]:
+    """Every edge that goes against the data flow, as ``"a (stage i) -> b (stage j)"``.
+
+    Against the flow: to a higher stage, or, below the entry points, to another group of the
+    same stage (train <-> bench).
+    """
+    out = []
+    for src in sorted(graph):
+        s = stages[group(src)]
+        for dst in sorted(graph[src]):
+            d = stages[group(dst)]
+            if d > s or (d == s < TOP and group(dst) != group(src)):
+                out.append(f"{src} (stage {s}) -> {dst} (stage {d})")
+    return out
+
+
 def test_graph_sees_the_package():
     graph = import_graph()
     assert f"{PACKAGE}.bench.runner" in graph
@@ -140,6 +184,24 @@ def test_cycle_finder_finds_long_cycles():
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a", "d"}, "d": set(), "e": {"e"}}
     assert strongly_connected(graph) == [{"a", "b", "c"}]
     assert _cycle_in(graph, {"a", "b", "c"}) == ["a", "b", "c", "a"]
+
+
+def test_upward_import_finder():
+    graph = {
+        f"{PACKAGE}.envs.base": {f"{PACKAGE}.paths", f"{PACKAGE}.policies.aef"},
+        f"{PACKAGE}.policies.aef": {f"{PACKAGE}.envs.base", f"{PACKAGE}"},
+        f"{PACKAGE}.bench.runner": {f"{PACKAGE}.train.aef", f"{PACKAGE}.bench.outcome"},
+        f"{PACKAGE}.bench.outcome": set(),
+        f"{PACKAGE}.train.aef": set(),
+        f"{PACKAGE}.cli": {f"{PACKAGE}.demo"},
+        f"{PACKAGE}.demo": {f"{PACKAGE}.bench.runner"},
+        f"{PACKAGE}.paths": set(),
+        f"{PACKAGE}": set(),
+    }
+    assert upward_imports(graph, STAGES) == [
+        f"{PACKAGE}.bench.runner (stage 6) -> {PACKAGE}.train.aef (stage 6)",
+        f"{PACKAGE}.envs.base (stage 4) -> {PACKAGE}.policies.aef (stage 5)",
+    ]
 
 
 def test_relative_imports_resolve(tmp_path):
@@ -159,3 +221,13 @@ def test_no_import_cycles():
     )
     gone = KNOWN_CYCLES - comps
     assert not gone, f"known cycles now gone, drop them from KNOWN_CYCLES: {sorted(gone)}"
+
+
+def test_every_module_has_a_stage():
+    missing = sorted({group(m) for m in import_graph()} - STAGES.keys())
+    assert not missing, f"place these in STAGES (tests/test_layout.py): {missing}"
+
+
+def test_no_import_against_the_data_flow():
+    upward = upward_imports(import_graph(), STAGES)
+    assert not upward, "a lower stage imports a higher one:\n" + "\n".join(upward)

@@ -279,7 +279,7 @@ def make_env(scenario: str, attention: str, max_seconds: float | None, privilege
     """The scenario's env with the attention setting and the trial time limit.
 
     ``privileged`` adds the simulator's truth to the observation (``true_blocks``, ``feet``),
-    for the privileged oracle (:class:`neurocog_gym.oracle.OraclePolicy`).
+    for the privileged oracle (:class:`neurocog_gym.policies.oracle.OraclePolicy`).
     """
     import gymnasium as gym
 

@@ -10,7 +10,7 @@ here a fast one: the provision's brake (``generator.py``: s_SAG below ``brake_fr
 stride down to the reversed trot at s_SAG = -1) stops the body, then the side step (s_COR) moves
 every leg's lane off the block, then the trot walks past with the heading held (s_DIR).
 
-This is the avoid reflex (``neurocog_gym/avoid.py``, which drives the hips through the interrupt
+This is the avoid reflex (``policies/avoid.py``, which drives the hips through the interrupt
 group and reads the env from outside) recast as a geometric teacher inside the effectivity: its
 states and distances are the reflex's, its outputs are the three walking-provision values, and
 the AEF network's provision head turns them into the action (``policies.AEFPolicy``). Dev

@@ -1,4 +1,4 @@
-"""SpinVectorEnv (neurocog_gym/vector.py): the same results as SyncVectorEnv, bit for bit, and
+"""SpinVectorEnv (neurocog_gym/envs/vector.py): the same results as SyncVectorEnv, bit for bit, and
 clear errors instead of hangs."""
 
 import os
@@ -12,7 +12,7 @@ from gymnasium import spaces
 from gymnasium.vector import SyncVectorEnv
 
 import neurocog_gym
-from neurocog_gym.vector import SpinVectorEnv, make_spin_vector
+from neurocog_gym.envs.vector import SpinVectorEnv, make_spin_vector
 
 SUDDEN = "NeuroCog/SuddenObstacle-v1"
 
@@ -143,7 +143,7 @@ def test_make_vec_default_mode_is_spin_and_agrees_with_sync():
     assert spin.action_space == sync.action_space
     _assert_same_rollouts(sync, spin, 40, 2)
     for env_id in neurocog_gym.ENV_IDS:
-        assert gym.spec(env_id).vector_entry_point.startswith("neurocog_gym.vector:")
+        assert gym.spec(env_id).vector_entry_point.startswith("neurocog_gym.envs.vector:")
 
 
 def test_merge_infos_is_gymnasiums_add_info():
@@ -301,7 +301,7 @@ def test_sb3_spin_vec_env_matches_dummy_vec_env():
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from neurocog_gym.sb3_vec import SpinVecEnv
+    from neurocog_gym.envs.sb3_vec import SpinVecEnv
 
     kw = dict(n_envs=2, seed=3, env_kwargs={"max_episode_steps": 40})
     dummy = make_vec_env(SUDDEN, vec_env_cls=DummyVecEnv, **kw)
@@ -338,7 +338,7 @@ def test_sb3_spin_vec_env_matches_dummy_vec_env():
 def test_sb3_ppo_learns_a_few_steps_on_spin_vec_env():
     from stable_baselines3 import PPO
 
-    from neurocog_gym.sb3_vec import SpinVecEnv
+    from neurocog_gym.envs.sb3_vec import SpinVecEnv
 
     venv = SpinVecEnv([lambda: gym.make(SUDDEN, max_episode_steps=30)] * 2)
     try:
@@ -364,7 +364,7 @@ def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
     script = tmp_path / "die.py"
     script.write_text(
         "import os, sys, numpy as np, gymnasium as gym\n"
-        "from neurocog_gym.vector import SpinVectorEnv\n"
+        "from neurocog_gym.envs.vector import SpinVectorEnv\n"
         "def make():\n"
         "    return gym.make('NeuroCog/Walk-v1')\n"
         "if __name__ == '__main__':\n"
@@ -400,7 +400,7 @@ def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
     script = tmp_path / "interrupt.py"
     script.write_text(
         "import numpy as np, gymnasium as gym\n"
-        "from neurocog_gym.vector import SpinVectorEnv\n"
+        "from neurocog_gym.envs.vector import SpinVectorEnv\n"
         "def make():\n"
         "    return gym.make('NeuroCog/Walk-v1')\n"
         "if __name__ == '__main__':\n"

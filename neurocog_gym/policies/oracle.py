@@ -37,7 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-ACTION_DIM = 15
+from neurocog_gym.policies.base import ACTION_DIM
+
 IDLE, LIFT, CARRY, DROP, APPROACH = 0, 1, 2, 3, 4
 
 

@@ -1,12 +1,12 @@
-"""The privileged step-over oracle (neurocog_gym/oracle.py): what it reads, what it returns."""
+"""The privileged step-over oracle (neurocog_gym/policies/oracle.py): what it reads and returns."""
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
 import neurocog_gym  # noqa: F401
-from neurocog_gym.oracle import OraclePolicy
 from neurocog_gym.policies import make_policy
+from neurocog_gym.policies.oracle import OraclePolicy
 
 
 def test_make_policy_oracle_is_the_privileged_oracle():

@@ -1,4 +1,4 @@
-"""SpinVecEnv: stable-baselines3's ``VecEnv`` on :class:`neurocog_gym.vector.SpinVectorEnv`.
+"""SpinVecEnv: stable-baselines3's ``VecEnv`` on :class:`neurocog_gym.envs.vector.SpinVectorEnv`.
 
 SB3 trains on its own vector-env API (``step_async`` / ``step_wait``, same-step resets with the
 last observation in ``info["terminal_observation"]``, a list of infos). Its ``SubprocVecEnv``
@@ -9,7 +9,7 @@ processes that wait by spinning on shared memory — with the results of SB3's `
 on the same env factories (``tests/ecosystem/test_spin_vector.py``).
 
     from stable_baselines3.common.env_util import make_vec_env
-    from neurocog_gym.sb3_vec import SpinVecEnv
+    from neurocog_gym.envs.sb3_vec import SpinVecEnv
 
     venv = make_vec_env("NeuroCog/SuddenObstacle-v1", n_envs=2, seed=0, vec_env_cls=SpinVecEnv)
 """
@@ -25,7 +25,7 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 from stable_baselines3.common.vec_env.patch_gym import _patch_env
 
-from neurocog_gym.vector import SpinVectorEnv, _SameStepSlot
+from neurocog_gym.envs.vector import SpinVectorEnv, _SameStepSlot
 
 
 def _reset_env(env: gym.Env, seed, options):

@@ -1,5 +1,5 @@
-"""The avoid reflex (neurocog_gym/avoid.py): clean passes where the blind CPG stumbles, the AEF's
-provision elsewhere, and a clear error when it is not bound to an obstacle env."""
+"""The avoid reflex (neurocog_gym/policies/avoid.py): clean passes where the blind CPG stumbles,
+the AEF's provision elsewhere, and a clear error when it is not bound to an obstacle env."""
 
 import gymnasium as gym
 import numpy as np
@@ -55,7 +55,7 @@ def test_the_policy_must_be_bound_to_an_obstacle_env():
 def test_leg_gap_reaches_from_the_sole_up_to_the_knee():
     """A leg's front point at a block's height: the sole's front below the shank, the knee (or
     the thigh) once the block's top is above them."""
-    from neurocog_gym.avoid import FOOT_RADIUS, AvoidPolicy
+    from neurocog_gym.policies.avoid import FOOT_RADIUS, AvoidPolicy
 
     env = make_env("sudden", "on", None)
     try:

@@ -54,6 +54,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from neurocog_gym.policies.aef import AEFPolicy
+
 FOOT_RADIUS = 0.018
 """Sole sphere radius, m (assets/quadruped.xml)."""
 _THIGH_Y = np.array([0.045, -0.045, 0.045, -0.045])
@@ -133,8 +135,6 @@ class AvoidPolicy:
     name = "avoid"
 
     def __init__(self, params: AvoidParams | None = None, weights=None):
-        from neurocog_gym.policies import AEFPolicy
-
         self.p = params or AvoidParams()
         self.fallback = AEFPolicy(weights=weights, interrupt_gain=0.0)
         self._u = None

@@ -27,7 +27,7 @@ env's step, and these steps vary (a ToF frame every 2.2 cycles, a 15 ms reset ev
 steps), which bounds any lock-step vector env of two such envs at about 1.7 x one env even with
 free communication (``scripts/bench_env.py``); this one reaches 1.3-1.45 x with the obstacle env.
 
-:class:`neurocog_gym.sb3_vec.SpinVecEnv` puts stable-baselines3's ``VecEnv`` API on the same
+:class:`neurocog_gym.envs.sb3_vec.SpinVecEnv` puts stable-baselines3's ``VecEnv`` API on the same
 workers.
 
 The counter protocol relies on stores becoming visible in program order, which x86-64 gives;
