@@ -24,7 +24,7 @@ def generator_cycle(
     qpos, qvel, sensordata, ctrl, qpos_adr, dof_adr, touch_adr, actuator, weight_per_leg,
     cpg_x, cpg_v, W, V, cpg_consts, n_sub, joint_neurons, g_flex, g_ext,
     q_ref, qd_ref, posture, motor_consts, acc_max, vel_max, fl_width, Z, q_lo, q_hi, dt,
-    zeros12, y_out, x_max, gain, coupling, joint_lo, joint_hi, target,
+    zeros12, y_out, x_max, coupling, joint_lo, joint_hi, target, gain,
 ):  # fmt: skip
     """One 0.01 s cycle of CPG (Eq. 5-7) and motor-neuron pools (Eq. 8-11); writes ``ctrl``.
 
