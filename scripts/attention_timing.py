@@ -17,7 +17,7 @@ frame. Times after the block appeared (s), per trial:
 
     .venv/bin/python scripts/attention_timing.py [--trials 20] [--seed 100]
 
-Writes the ``timing`` section of ``docs/benchmarks_perception.md``.
+Writes the ``timing`` section of ``docs/generated/benchmarks_perception.md``.
 """
 
 from __future__ import annotations

@@ -61,7 +61,7 @@ class Args:
     sizes: list[int] = field(default_factory=lambda: [150, 300, 500])
     repeats: int = 3000
     graphs: int = 5
-    out: Path = Path("docs/benchmarks_affordance.md")
+    out: Path = Path("docs/generated/benchmarks_affordance.md")
 
 
 def parse(argv: list[str] | None = None) -> Args:
@@ -69,7 +69,7 @@ def parse(argv: list[str] | None = None) -> Args:
     p.add_argument("--sizes", type=int, nargs="+", default=[150, 300, 500], help="node counts")
     p.add_argument("--repeats", type=int, default=3000, help="timed calls per size")
     p.add_argument("--graphs", type=int, default=5, help="graphs (seeds) per size")
-    p.add_argument("--out", type=Path, default=Path("docs/benchmarks_affordance.md"))
+    p.add_argument("--out", type=Path, default=Path("docs/generated/benchmarks_affordance.md"))
     a = p.parse_args(argv)
     if a.repeats < 1 or a.graphs < 1 or min(a.sizes) < 10:
         p.error("need --repeats >= 1, --graphs >= 1 and sizes >= 10")

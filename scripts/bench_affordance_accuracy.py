@@ -21,7 +21,7 @@ pipeline's ``min_height`` high, the ones the attention and the env act on).
     .venv/bin/python scripts/bench_affordance_accuracy.py              # 100 + 20 scenes
     .venv/bin/python scripts/bench_affordance_accuracy.py --quick      # 10 + 3 scenes
 
-Writes the ``accuracy`` section of ``docs/benchmarks_perception.md``.
+Writes the ``accuracy`` section of ``docs/generated/benchmarks_perception.md``.
 """
 
 from __future__ import annotations

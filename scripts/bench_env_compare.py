@@ -14,7 +14,7 @@ seeded episodes), so the speed-up is known not to have changed what the env comp
 
     .venv/bin/python scripts/bench_env_compare.py --baseline 4fd0b6d --rounds 5 --seconds 8
 
-Writes ``docs/benchmarks_env_compare.md`` (``--out``).
+Writes ``docs/generated/benchmarks_env_compare.md`` (``--out``).
 """
 
 from __future__ import annotations
@@ -94,7 +94,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--baseline", required=True, help="git commit (or ref) to compare against")
     ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds (median over them)")
     ap.add_argument("--seconds", type=float, default=8.0, help="timed seconds per row per round")
-    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "benchmarks_env_compare.md")
+    ap.add_argument(
+        "--out", type=Path, default=ROOT / "docs" / "generated" / "benchmarks_env_compare.md"
+    )
     ap.add_argument("--note", default="", help="a paragraph appended to the section")
     args = ap.parse_args(argv)
     if args.rounds < 1 or not args.seconds > 0:

@@ -1,8 +1,8 @@
 """Benchmark DD-GNG, GNG, ML-GNG and the NumPy oracle (paper §7.1; SPEC §3).
 
 Prints a markdown table and writes it, with the command line and the machine, to
-``docs/benchmarks_gng.md``. All timings are wall-clock medians of single calls on one core,
-each call on a different full-resolution frame (154,112 points) from a pool of frames.
+``docs/generated/benchmarks_gng.md``. All timings are wall-clock medians of single calls on one
+core, each call on a different full-resolution frame (154,112 points) from a pool of frames.
 
     .venv/bin/python scripts/bench_gng.py            # full run (~10 min)
     .venv/bin/python scripts/bench_gng.py --quick    # smoke run (~1 min)
@@ -44,7 +44,7 @@ class Args:
     quick: bool = False
     frames: int = 12
     repeats: int = 2000
-    out: str = "docs/benchmarks_gng.md"
+    out: str = "docs/generated/benchmarks_gng.md"
 
 
 def floor_and_box(n: int, seed: int) -> np.ndarray:

@@ -5,7 +5,7 @@ and three are parked under the floor, a 13-body quadruped whose 17 geoms are in 
 fanned sensor sites), or loads ``--scene PATH``, then times ``ToFArray.sense`` at full
 resolution (224 × 172 × 4 = 154,112 rays) and at the default resolution, with both ray-casting
 backends, and breaks the time down into its stages. Prints a markdown table and writes it to
-``--out`` (default ``docs/benchmarks_tof.md``).
+``--out`` (default ``docs/generated/benchmarks_tof.md``).
 
     python scripts/bench_tof.py [--frames 200] [--scene assets/scene.xml] [--out FILE]
 """
@@ -43,7 +43,7 @@ class Args:
     """Timed frames per configuration (full-resolution mj_multiRay runs a quarter of them)."""
     scene: str | None = None
     """MJCF scene with the tof_* sites instead of the built-in one."""
-    out: str = "docs/benchmarks_tof.md"
+    out: str = "docs/generated/benchmarks_tof.md"
     """Markdown report to write ('' to skip)."""
 
 

@@ -1,6 +1,7 @@
 """Walk-v1 benchmark: throughput beside Gymnasium's Ant-v5, and the default gait's statistics.
 
-Three parts, printed as markdown tables and written to ``--out`` (``docs/benchmarks_walk.md``):
+Three parts, printed as markdown tables and written to ``--out``
+(``docs/generated/benchmarks_walk.md``):
 
 1. Throughput, one process pinned to one core, timed interleaved in rounds (so load from other
    processes falls on every row alike), medians over the rounds: ``NeuroCog/Walk-v1`` env steps/s
@@ -71,7 +72,7 @@ class Args:
     """Seeds of each walking-provision row ('0' skips part 3)."""
     provision_seconds: float = 20.0
     """Simulated seconds per provision run."""
-    out: str = "docs/benchmarks_walk.md"
+    out: str = "docs/generated/benchmarks_walk.md"
     """Markdown report to write ('' to skip)."""
 
 

@@ -44,7 +44,7 @@ median swing clearance outside 3.2-4.8 cm and any swing above 5.8 cm; lateral dr
 it, found a pace-like gait with that share at 0.53, which tipped over whenever a front swing was
 held); short touch-downs of under 80 ms. About 1,100 candidates in four rounds. The chromosome's
 genes were not searched; ``neurocog tune-cpg`` (NSGA-II, §6.3, Table 3) tunes them from this gait.
-Measured numbers are in ``docs/benchmarks_walk.md`` (``scripts/bench_walk.py``) and
+Measured numbers are in ``docs/generated/benchmarks_walk.md`` (``scripts/bench_walk.py``) and
 ``docs/body.md`` (``scripts/body_figures.py``).
 
 Usage: python scripts/design_gait.py [--params PARAMS.json] [--notes NOTES.json]

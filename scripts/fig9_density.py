@@ -11,7 +11,7 @@ elsewhere (the rest of the graph over the rest of the area the frame covers).
     .venv/bin/python scripts/fig9_density.py [--trials 10] [--seed 0]
 
 Writes ``docs/img/fig9_density.png`` and the ``fig9`` section of
-``docs/benchmarks_perception.md``.
+``docs/generated/benchmarks_perception.md``.
 """
 
 from __future__ import annotations
@@ -61,7 +61,9 @@ def parse(argv: list[str] | None = None) -> Args:
     p.add_argument("--after", type=float, default=Args.after, help="s recorded after it appears")
     p.add_argument("--out", type=Path, default=Args.out)
     p.add_argument(
-        "--no-write", action="store_true", help="do not touch docs/benchmarks_perception.md"
+        "--no-write",
+        action="store_true",
+        help="do not touch docs/generated/benchmarks_perception.md",
     )
     a = p.parse_args(argv)
     if a.trials < 1 or a.after <= 0:
@@ -102,7 +104,7 @@ def report(args: Args, data, elapsed: float, load0: str, load1: str, argv: list[
         "trotting, 0.7–0.9 m ahead; same frames to both nets; Table 2 parameters; one learning "
         "cycle per 0.01 s control cycle. Mean over trials (min–max in brackets).",
         "",
-        "![Fig. 9](img/fig9_density.png)",
+        "![Fig. 9](../img/fig9_density.png)",
         "",
         "| t after appearance (s) | net | density on obstacle region (nodes/m²) | density "
         "elsewhere | ratio | nodes on obstacle (> 2 cm) | nodes in total |",

@@ -45,7 +45,7 @@ from neurocog_gym.perception.similarity import box_surface_reference, surface_ma
 from neurocog_gym.robot.obstacles import Block, ObstaclePool
 from neurocog_gym.robot.tof import ToFArray, ToFParams
 
-DOC = Path(__file__).resolve().parent.parent / "docs" / "benchmarks_perception.md"
+DOC = Path(__file__).resolve().parent.parent / "docs" / "generated" / "benchmarks_perception.md"
 DOC_TITLE = "## Perception in the loop: Fig. 9, attention timing, similarity, accuracy"
 
 
@@ -428,7 +428,9 @@ def load_now() -> str:
 
 
 def write_section(key: str, text: str, doc: Path = DOC) -> None:
-    """Replace (or append) the section ``key`` of ``docs/benchmarks_perception.md``, atomically.
+    """Replace (or append) the section ``key`` of the perception page, atomically.
+
+    The page is ``docs/generated/benchmarks_perception.md`` unless ``doc`` says otherwise.
 
     Each script owns one section between ``<!-- begin KEY -->`` and ``<!-- end KEY -->``.
     """

@@ -11,7 +11,7 @@ at 0.5 s. Paper (§8): 0.91 with attention, 0.6 without.
     .venv/bin/python scripts/plot_similarity.py [--trials 10] [--seed 200] [--after 1.5]
 
 Writes ``docs/img/similarity.png`` and the ``similarity`` section of
-``docs/benchmarks_perception.md``.
+``docs/generated/benchmarks_perception.md``.
 """
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ def main(argv: list[str] | None = None) -> str:
         "close to or over the block and only a few nodes on it remain in view, so late values "
         "rest on few nodes.",
         "",
-        "![similarity](img/similarity.png)",
+        "![similarity](../img/similarity.png)",
         "",
         "| net | best μ | time to best (s) | μ at 0.5 s | best μ within 0.5 s | best μ within 1 s "
         "|",

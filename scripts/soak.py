@@ -10,7 +10,7 @@ count seen against the map's ``max_nodes``.
 
 Usage:
     python scripts/soak.py --env NeuroCog/Walk-v1 --steps 1000000 --json runs/soak/walk.json
-    python scripts/soak.py --report runs/soak/*.json --out docs/benchmarks_soak.md
+    python scripts/soak.py --report runs/soak/*.json --out docs/generated/benchmarks_soak.md
 """
 
 from __future__ import annotations
@@ -195,7 +195,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=d.seed)
     ap.add_argument("--json", default=d.json, help="write the result here")
     ap.add_argument("--report", nargs="+", default=None, help="soak JSON files to tabulate")
-    ap.add_argument("--out", default="docs/benchmarks_soak.md")
+    ap.add_argument("--out", default="docs/generated/benchmarks_soak.md")
     ns = ap.parse_args(argv)
     if ns.report:
         print(report(ns.report, Path(ns.out)))
