@@ -14,12 +14,12 @@ processes falls on every row alike, and reported as medians over the rounds):
    process (env steps/s = vector steps/s x 2; ratios also paired round by round); the lock-step
    ceiling of recorded step times under both parallel vector envs; then the time of each
    stage of an obstacle-env step at default and full resolution. Writes ``--out``
-   (docs/benchmarks_env.md).
+   (docs/generated/benchmarks_env.md).
 2. ``--part ppo``: stable-baselines3 PPO training throughput (env steps/s of ``model.learn``,
    rollouts and updates) of ``scripts/train_ppo.py`` with the same hyper-parameters on
    ``NeuroCog/SuddenObstacle-v1`` and on ``Ant-v5``; optionally the success rates of finished
    ``neurocog bench`` runs (``--bench-runs``) side by side. Writes ``--ppo-out``
-   (docs/benchmarks_ppo.md).
+   (docs/generated/benchmarks_ppo.md).
 
 The load average (``uptime``) is recorded before and after each part: on a shared machine the
 absolute numbers move with it, the ratios much less.
@@ -74,9 +74,9 @@ class Args:
     """A scripts/train_ppo.py run folder whose train_summary.json goes into the PPO section."""
     bench_runs: tuple[str, ...] = ()
     """neurocog bench run folders whose summary.json goes into the PPO section."""
-    out: str = "docs/benchmarks_env.md"
+    out: str = "docs/generated/benchmarks_env.md"
     """Markdown of part env ('' to skip)."""
-    ppo_out: str = "docs/benchmarks_ppo.md"
+    ppo_out: str = "docs/generated/benchmarks_ppo.md"
     """Markdown of part ppo ('' to skip)."""
 
 

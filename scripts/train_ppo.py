@@ -17,8 +17,8 @@ checkpoint (or ``model.zip``) up to ``--total-steps``. Observations are normalis
 checkpoint (written before the zip, both atomically), restored on ``--resume``, and loaded by
 ``neurocog_gym.policies.SB3Policy``, so ``neurocog bench --policy OUT/model.zip`` evaluates the
 policy as it was trained. The defaults (small action spread, learning rate 3e-5, 2048-step
-rollouts, ``target_kl`` 0.02) come from the short diagnostic trainings in
-``docs/benchmarks_ppo.md``.
+rollouts, ``target_kl`` 0.02) come from short diagnostic trainings on v0; the reasons are in
+``docs/training.md`` (PPO).
 
     python scripts/train_ppo.py --total-steps 200000 --n-envs 2 --out runs/ppo
     python scripts/train_ppo.py --out runs/ppo --resume            # after a kill
@@ -58,9 +58,9 @@ class Args:
     """Parallel envs."""
     vec: str = "spin"
     """spin (env 0 in this process, the others in spinning shared-memory workers:
-    neurocog_gym.envs.sb3_vec.SpinVecEnv; 1.64x SubprocVecEnv's PPO steps/s here,
-    docs/benchmarks_ppo.md), subproc (one process per env, SB3's SubprocVecEnv) or dummy (all in
-    this process)."""
+    neurocog_gym.envs.sb3_vec.SpinVecEnv; 1.64x SubprocVecEnv's PPO steps/s here on v0,
+    docs/generated/benchmarks_ppo.md), subproc (one process per env, SB3's SubprocVecEnv) or
+    dummy (all in this process)."""
     seed: int = 0
     """Seed of the envs (env i gets seed + i), the policy initialisation and the sampling."""
     n_steps: int = 2048
@@ -100,7 +100,7 @@ class Args:
     (0: off, the policy starts at all zeros). A new run only (not with --resume); the cloned
     policy is saved as OUT/checkpoints/ppo_0_steps.zip before PPO starts. Pair it with a small
     action spread: with --log-std-init -3.5 and --env-kwargs '{"touch_cost": 50}', 35 min of PPO
-    from the clone beat the AEF (docs/benchmarks_ppo.md); with the default -2 the clone failed
+    from the clone beat the AEF on v0 (docs/training.md); with the default -2 the clone failed
     two thirds of its training episodes and PPO drifted off."""
     bc_epochs: int = 30
     """Epochs over the recorded steps of the behaviour-cloning fit."""
