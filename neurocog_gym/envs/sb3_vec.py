@@ -3,7 +3,8 @@
 SB3 trains on its own vector-env API (``step_async`` / ``step_wait``, same-step resets with the
 last observation in ``info["terminal_observation"]``, a list of infos). Its ``SubprocVecEnv``
 sends every step through pipes to sleeping workers, which on this 2-core machine costs more than
-the sub-millisecond obstacle-env step it parallelises (``docs/benchmarks_env.md``). This class
+the sub-millisecond obstacle-env step it parallelises
+(``docs/generated/benchmarks_env.md``). This class
 gives SB3 the same workers as ``SpinVectorEnv`` — env 0 in the training process, the others in
 processes that wait by spinning on shared memory — with the results of SB3's ``DummyVecEnv``
 on the same env factories (``tests/ecosystem/test_spin_vector.py``).

@@ -1,10 +1,10 @@
 """SpinVectorEnv: a lock-step Gymnasium vector env for sub-millisecond steps on few cores.
 
-Why it exists (measured, ``docs/benchmarks_env.md``): one obstacle-env step takes about 0.5 ms
-here. Gymnasium's ``AsyncVectorEnv`` sends every step's command and result through a pipe to a
-sleeping worker; on this 2-core machine two such workers run at 0.6-0.8 x the steps/s of one env
-stepped in-process, and even a stand-in env that only busy-waits our step times gets 1.2 x.
-The cost is the wake-ups and round trips, not the cores (two free env processes: 1.9-2.0 x).
+Why it exists (measured, ``docs/generated/benchmarks_env.md``): one obstacle-env step takes about
+0.5 ms here. Gymnasium's ``AsyncVectorEnv`` sends every step's command and result through a pipe to
+a sleeping worker; on this 2-core machine two such workers run at 0.6-0.8 x the steps/s of one env
+stepped in-process, and even a stand-in env that only busy-waits our step times gets 1.2 x. The cost
+is the wake-ups and round trips, not the cores (two free env processes: 1.9-2.0 x).
 
 What this one does instead:
 

@@ -3,7 +3,7 @@
 Why the AEF does not step over such a block here: the motor-neuron pools (Eq. 8 with the
 restoring term) hold a joint at most about 0.9 rad from the standing posture, so a foot rises
 ~8-10 cm and only close under its hip, while the blocks are 6-8 cm high and appear 4-13 cm
-ahead of the hip of a leg that is already swinging (measured: ``docs/avoid_notes.md``). The
+ahead of the hip of a leg that is already swinging (measured: ``52b50df:docs/avoid_notes.md``). The
 affordance (the block's height, its distance) does not fit that effectivity, so the fit chooses
 the other action the paper gives the AEF, a change of the walking provision (§5.2, Fig. 20b) —
 here a fast one: the provision's brake (``generator.py``: s_SAG below ``brake_from`` scales the
@@ -16,7 +16,7 @@ states and distances are the reflex's, its outputs are the three walking-provisi
 the AEF network's provision head turns them into the action (``policies.AEFPolicy``). Dev
 trials (run seed 2, sudden 0..99, success / touch / fail): the reflex 94 / 4 / 2, this teacher
 through the AEF network 81 / 14 / 5; the benchmark (seed 0, 200 sudden trials): 158 / 34 / 8,
-was 0 / 17 / 33 of 50 with the up-and-over interrupt (``docs/avoid_notes.md``, 2026-12-01).
+was 0 / 17 / 33 of 50 with the up-and-over interrupt (``52b50df:docs/avoid_notes.md``, 2026-12-01).
 
 States, for the remembered boxes that were first seen within ``sudden_range`` of the leading
 foot, and for any box taller than ``step_over_height`` that a swing meets (``adopt``: the legs
@@ -75,8 +75,8 @@ class AvoidanceParams:
     min_height: float = 0.02
     """Remembered boxes lower than this are ignored, m."""
     step_over_height: float = 0.04
-    """Tallest box a swing can carry a foot over, m (the gait's swing clearance: 4.0 cm front,
-    ``docs/benchmarks_walk.md``). A taller box that a swing meets, lying ahead of the feet, is
+    """Tallest box a swing can carry a foot over, m (the gait's swing clearance: 4.0 cm front on
+    body v0). A taller box that a swing meets, lying ahead of the feet, is
     handed to this teacher however far away it was first seen (``adopt``)."""
     same_box: float = 0.15
     """Box centres closer than this are the same box across memory updates, m."""

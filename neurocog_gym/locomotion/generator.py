@@ -73,7 +73,8 @@ class ProvisionParams:
     """s_SAG below which the brake acts (stride scale linear to -1 at s_SAG = -1)."""
     brake_tau: float = 0.01
     """Low-pass time constant of s_SAG while braking, s (one control cycle: at once; 0.02 s
-    left 28-38 of 100 dev trials touching the block against 14-18, ``docs/avoid_notes.md``)."""
+    left 28-38 of 100 dev trials touching the block against 14-18,
+    ``52b50df:docs/avoid_notes.md``)."""
     dir_gain: float = 0.3
     """Fractional left/right stride difference per unit s_DIR."""
     dir_steer: float = 0.2

@@ -5,7 +5,7 @@ about 0.9-0.96 rad from the standing posture, so a foot stays below ~8-10 cm and
 under its hip, while the paper's blocks are 6-8 cm high and appear 4-13 cm ahead of the hip of
 a leg that is already swinging at 0.5 m/s. Every step-over pattern tried (inverse kinematics,
 timed high arcs, hovering on three legs, slowing the trot) did worse than the blind CPG
-(``docs/bench_notes.md``). The paper's own answer to an obstacle that is not in the current
+(``52b50df:docs/bench_notes.md``). The paper's own answer to an obstacle that is not in the current
 swing is the walking provision's walk-around (Fig. 20b); this reflex extends it to a block that
 appears in front of the robot: stop and back off first, then side-step with the walking
 provision, then walk past with the heading held.
@@ -33,7 +33,7 @@ head, which walks round them):
 A leg's gap to a block (``leg_gap``) is measured from its most forward point below the block's
 top — thigh, shank or sole capsule, from the hip, knee and foot positions — not from the sole:
 the shank leans forward from the sole, and with sole gaps the marching legs' shanks brushed the
-near face in most side-step contacts (measured: ``docs/avoid_notes.md``, 2026-11-27).
+near face in most side-step contacts (measured: ``52b50df:docs/avoid_notes.md``, 2026-11-27).
 
 The reflex reads the robot's own state inside the env (``env.unwrapped``): the effectivity's
 obstacle memory (perceived boxes only, never the simulator's), feet, knees and hips in the
@@ -41,11 +41,11 @@ world, the torso's yaw and the CPG's joint drives — as the effectivity does. I
 bound to an env with :meth:`AvoidPolicy.reset` after every ``env.reset``; the benchmark runner and
 ``record-video`` do that. It assumes the walking direction of the obstacle tasks, world +x.
 
-First tuned on the sudden benchmark's trials 0-99 (``scripts/explore_sudden.py``, its
+First tuned on the sudden benchmark's trials 0-99 (``52b50df:scripts/explore_sudden.py``, its
 ``BackAround`` with ``BEST``); the leg gap and its distances were then chosen on dev trials of
 run seeds 2 and 3 only, disjoint from the benchmark's seeds 0 and 1
-(``explore_sudden.py --policy avoid --seed 2``). The published benchmark runs are in
-``docs/benchmarks.md`` (section *bench*).
+(``explore_sudden.py --policy avoid --seed 2``, in git history). The published benchmark runs are in
+``docs/benchmark.md`` (v0 results).
 """
 
 from __future__ import annotations
@@ -202,7 +202,7 @@ class AvoidPolicy:
     def _reverse(self, act, drive, inlane, gap, t, obs) -> None:
         """Back-off interrupts into ``act``: the hips' CPG drive reversed, knees straightened.
 
-        ``inlane`` and ``gap`` (per leg) are for variants in ``scripts/explore_sudden.py``.
+        ``inlane`` and ``gap`` (per leg) were for variants in ``52b50df:scripts/explore_sudden.py``.
         """
         p = self.p
         act[_HIPS] = -p.k_rev * drive / 3.0

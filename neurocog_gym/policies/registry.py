@@ -32,7 +32,8 @@ def make_policy(spec: str):
     * ``"ppo"``: the shipped stable-baselines3 PPO policy (:class:`SB3Policy` on
       ``assets/ppo_sudden/model.zip`` and its observation statistics): cloned from the AEF,
       then 35 min of PPO on ``SuddenObstacle-v0`` (``assets/ppo_sudden/args.json``,
-      ``train_summary.json``; docs/benchmarks_ppo.md). The v1 envs replaced v0 (another body,
+      ``train_summary.json``; docs/generated/benchmarks_ppo.md). The v1 envs replaced v0 (another
+      body,
       1-D observation keys), so until it is retrained on v1 (issue 24) this raises a
       ``ValueError`` that says so (:func:`shipped_ppo_env`);
     * a path ending in ``.npz``: :class:`AEFPolicy` with those weights;

@@ -22,7 +22,7 @@ Choices (SPEC §2 leaves them open):
 - **Resolution.** Full resolution is 224 × 172 per sensor (154,112 rays a frame). The default is
   one quarter per axis, 56 × 43 (9,632 rays a frame): about 0.8° per pixel, i.e. 1.4 cm between
   samples at 1 m, so a 6 cm block still spans several rows, while a frame costs a few ms instead
-  of ~50 ms with ``mj_multiRay`` (see ``docs/benchmarks_tof.md``).
+  of ~50 ms with ``mj_multiRay`` (see ``docs/generated/benchmarks_tof.md``).
 - **Frame rate.** Default 45 fps, the Pico Flexx's fastest mode and the spec's cap. The gate
   (``due``/``maybe_sense``) keeps a drift-free schedule ``t0 + k / fps``; with a 0.01 s control
   cycle frames come every 2 or 3 cycles, averaging exactly 45 fps.

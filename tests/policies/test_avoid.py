@@ -19,9 +19,10 @@ def _trial(scenario: str, index: int, policy: str) -> dict:
         env.close()
 
 
-# The reflex was tuned on body v0 (docs/avoid_notes.md): on body v1 it falls in all of the first
-# 16 sudden trials, about 0.5 s after the block appears. Kept as a strict xfail so that the record
-# stays honest until issue 22 replaces the reflex (or it is retuned): an unexpected pass fails.
+# The reflex was tuned on body v0 (52b50df:docs/avoid_notes.md): on body v1 it falls in all of the
+# first 16 sudden trials, about 0.5 s after the block appears. Kept as a strict xfail so that the
+# record stays honest until issue 22 replaces the reflex (or it is retuned): an unexpected pass
+# fails.
 @pytest.mark.xfail(strict=True, reason="avoid reflex tuned for body v0; it falls on body v1")
 @pytest.mark.parametrize("index", [1, 2])
 def test_sudden_block_passed_without_contact_where_the_blind_cpg_hits_it(index):
