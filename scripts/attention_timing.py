@@ -1,11 +1,11 @@
 """Loop-closed attention timing: how fast the attention reacts to a newly appeared obstacle.
 
-The walking trial of ``fig9_density.py`` (``perception_scenes.walking_trial``): the robot
-trots in ``NeuroCog/Walk-v1``, a paper-sized block appears 0.7–0.9 m ahead, the four ToF sensors
-run at 45 fps and the attention pipeline (DD-GNG → affordance → suspected boxes → DD-GNG) is
-in the loop. Four pipelines see the same frames: DD-GNG and GNG, each either stepped every
-0.01 s control cycle on the latest frame (what ``envs/obstacle.py`` does) or once per new
-frame. Times after the block appeared (s), per trial:
+The walking trial of ``fig9_density.py`` (``neurocog_gym.bench.perception_scenes.walking_trial``):
+the robot trots in ``NeuroCog/Walk-v1``, a paper-sized block appears 0.7–0.9 m ahead, the four ToF
+sensors run at 45 fps and the attention pipeline (DD-GNG → affordance → suspected boxes → DD-GNG) is
+in the loop. Four pipelines see the same frames: DD-GNG and GNG, each either stepped every 0.01 s
+control cycle on the latest frame (what ``envs/obstacle.py`` does) or once per new frame. Times
+after the block appeared (s), per trial:
 
 * **detected**: first cycle with an object (suspected or not) overlapping the block;
 * **attended**: first cycle with an attention box over the block in the pipeline's memory;
@@ -27,13 +27,11 @@ import math
 import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from perception_scenes import Variant, load_now, walking_trial, write_section  # noqa: E402
+from neurocog_gym.bench.perception_scenes import Variant, load_now, walking_trial, write_section
 
 VARIANTS = {
     "DD-GNG, every control cycle": Variant("ddgng"),

@@ -27,9 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine  # noqa: E402
-
+from neurocog_gym.bench.machine import machine
 from neurocog_gym.perception import _affordance_kernels as _k
 from neurocog_gym.perception.affordance import (
     DEFAULT_PARAMS,

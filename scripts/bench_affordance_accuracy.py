@@ -31,13 +31,11 @@ import math
 import sys
 import time
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from perception_scenes import (  # noqa: E402
+from neurocog_gym.bench.perception_scenes import (
     StaticScene,
     boxes_overlap,
     extents,
@@ -45,11 +43,10 @@ from perception_scenes import (  # noqa: E402
     object_on,
     write_section,
 )
-
-from neurocog_gym.perception import AffordanceParams, AttentionPipeline, PipelineParams  # noqa: E402
-from neurocog_gym.perception.gng import DDGNGParams  # noqa: E402
-from neurocog_gym.robot.obstacles import Block  # noqa: E402
-from neurocog_gym.robot.tof import ToFParams  # noqa: E402
+from neurocog_gym.perception import AffordanceParams, AttentionPipeline, PipelineParams
+from neurocog_gym.perception.gng import DDGNGParams
+from neurocog_gym.robot.obstacles import Block
+from neurocog_gym.robot.tof import ToFParams
 
 
 @dataclass(frozen=True)

@@ -41,9 +41,9 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from benchlib import field_doc, machine  # noqa: E402
 
 import neurocog_gym  # noqa: F401  (registers the env ids)
+from neurocog_gym.bench.machine import field_doc, machine
 
 SUDDEN = "NeuroCog/SuddenObstacle-v1"
 

@@ -103,7 +103,8 @@ def main(argv: list[str] | None = None) -> None:
         ap.error("--rounds must be >= 1 and --seconds > 0")
     sys.path.insert(0, str(ROOT / "scripts"))
     from bench_env import _uptime, load_average
-    from benchlib import machine
+
+    from neurocog_gym.bench.machine import machine
 
     rev = subprocess.run(
         ["git", "-C", str(ROOT), "rev-parse", "--short", args.baseline],

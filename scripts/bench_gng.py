@@ -21,10 +21,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import cpu_model  # noqa: E402
-
-from neurocog_gym.perception import _gng_kernels as K  # noqa: E402
+from neurocog_gym.bench.machine import cpu_model
+from neurocog_gym.perception import _gng_kernels as K
 from neurocog_gym.perception.gng import DDGNG, GNG, MLGNG, DDGNGParams, _check_boxes
 from neurocog_gym.perception.gng_oracle import DDGNGOracle
 

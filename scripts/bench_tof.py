@@ -22,15 +22,13 @@ from pathlib import Path
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
+import mujoco
+import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine  # noqa: E402
-
-from neurocog_gym.robot import tof as tof_mod  # noqa: E402
-from neurocog_gym.robot.names import RAY_GEOM_GROUPS, ROBOT_GEOM_GROUP, TOF_SITES  # noqa: E402
-from neurocog_gym.robot.tof import ToFArray, ToFParams  # noqa: E402
+from neurocog_gym.bench.machine import machine
+from neurocog_gym.robot import tof as tof_mod
+from neurocog_gym.robot.names import RAY_GEOM_GROUPS, ROBOT_GEOM_GROUP, TOF_SITES
+from neurocog_gym.robot.tof import ToFArray, ToFParams
 
 G = mujoco.mjtGeom
 

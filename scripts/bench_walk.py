@@ -45,10 +45,8 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import field_doc, machine  # noqa: E402
-
 import neurocog_gym  # noqa: F401  (registers the env ids)
+from neurocog_gym.bench.machine import field_doc, machine
 from neurocog_gym.robot.names import LEGS
 
 WALK = "NeuroCog/Walk-v1"

@@ -12,21 +12,17 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine  # noqa: E402
-
-from neurocog_gym.bench.body import (  # noqa: E402
+from neurocog_gym.bench.body import (
     LIFT_HIP,
     LIFT_KNEE,
     body_figures,
     interrupt_lift_sweep,
 )
-from neurocog_gym.locomotion.motor import MotorParams  # noqa: E402
+from neurocog_gym.bench.machine import machine
+from neurocog_gym.locomotion.motor import MotorParams
 
 
 @dataclasses.dataclass(frozen=True)

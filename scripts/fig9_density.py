@@ -1,12 +1,12 @@
 """Fig. 9 reproduction: node density on a suddenly appearing obstacle, DD-GNG against GNG.
 
 The robot trots in ``NeuroCog/Walk-v1``; after ``--appear`` s a wooden block (the paper's: 6–8 cm
-high, 5–12 cm long, 10–30 cm wide) appears 0.7–0.9 m ahead. Its four ToF sensors (45 fps)
-feed the same frames to two attention pipelines, DD-GNG (attention on) and plain GNG
-(attention off), each running one learning cycle + affordance detection per 0.01 s control
-cycle, as the obstacle envs do (see ``perception_scenes.walking_trial``). Node density is
-nodes per m² of ground inside the obstacle region (the block's footprint grown by 3 cm) and
-elsewhere (the rest of the graph over the rest of the area the frame covers).
+high, 5–12 cm long, 10–30 cm wide) appears 0.7–0.9 m ahead. Its four ToF sensors (45 fps) feed the
+same frames to two attention pipelines, DD-GNG (attention on) and plain GNG (attention off), each
+running one learning cycle + affordance detection per 0.01 s control cycle, as the obstacle envs do
+(see ``neurocog_gym.bench.perception_scenes.walking_trial``). Node density is nodes per m² of ground
+inside the obstacle region (the block's footprint grown by 3 cm) and elsewhere (the rest of the
+graph over the rest of the area the frame covers).
 
     .venv/bin/python scripts/fig9_density.py [--trials 10] [--seed 0]
 
@@ -25,14 +25,12 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from tqdm import tqdm  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from tqdm import tqdm
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from perception_scenes import Variant, load_now, walking_trial, write_section  # noqa: E402
-
-from neurocog_gym.io import atomic_write_bytes  # noqa: E402
+from neurocog_gym.bench.perception_scenes import Variant, load_now, walking_trial, write_section
+from neurocog_gym.io import atomic_write_bytes
 
 VARIANTS = {"DD-GNG": Variant("ddgng"), "GNG": Variant("gng")}
 COLOURS = {"DD-GNG": "#d62728", "GNG": "#1f77b4"}

@@ -15,21 +15,18 @@ from __future__ import annotations
 
 import argparse
 import io
-import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Line3DCollection  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import LineCollection
+from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from perception_scenes import Variant, walking_trial  # noqa: E402
-
-from neurocog_gym.io import atomic_write_bytes  # noqa: E402
+from neurocog_gym.bench.perception_scenes import Variant, walking_trial
+from neurocog_gym.io import atomic_write_bytes
 
 VARIANTS = {"DD-GNG": Variant("ddgng"), "GNG": Variant("gng")}
 

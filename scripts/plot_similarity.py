@@ -25,15 +25,13 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from tqdm import tqdm  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from tqdm import tqdm
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from perception_scenes import Variant, load_now, walking_trial, write_section  # noqa: E402
-
-from neurocog_gym.io import atomic_write_bytes  # noqa: E402
-from neurocog_gym.perception.similarity import SimilarityTrace  # noqa: E402
+from neurocog_gym.bench.perception_scenes import Variant, load_now, walking_trial, write_section
+from neurocog_gym.io import atomic_write_bytes
+from neurocog_gym.perception.similarity import SimilarityTrace
 
 VARIANTS = {"DD-GNG": Variant("ddgng"), "GNG": Variant("gng")}
 COLOURS = {"DD-GNG": "#d62728", "GNG": "#1f77b4"}

@@ -39,8 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import field_doc  # noqa: E402
+from neurocog_gym.bench.machine import field_doc
 
 
 @dataclasses.dataclass(frozen=True)

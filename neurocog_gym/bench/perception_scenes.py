@@ -1,7 +1,7 @@
 """Shared machinery of the perception figures and benchmarks (issues 3 and 4).
 
-Not an entry point: ``fig9_density.py``, ``attention_timing.py``, ``plot_similarity.py``,
-``plot_graph_cloud.py`` and ``bench_affordance_accuracy.py`` import it.
+Used by ``scripts/fig9_density.py``, ``attention_timing.py``, ``plot_similarity.py``,
+``plot_graph_cloud.py`` and ``bench_affordance_accuracy.py``.
 
 Two kinds of scene, both in the robot's own MuJoCo world (``assets/scene.xml``) and sensed by
 the robot's four ToF sensors (:class:`neurocog_gym.robot.tof.ToFArray`) at their frame rate:
@@ -388,9 +388,11 @@ class StaticScene:
     def run(
         self, pipe: AttentionPipeline, seconds: float, t0: float, dt: float = 0.01, on_cycle=None
     ):
-        """Advance the clock by ``seconds`` from ``t0``: frames at the sensor rate, one pipeline
-        step per control cycle ``dt`` on the latest frame. ``on_cycle(t, frame, aff)`` is called
-        after every step. Returns the end time."""
+        """Advance the clock by ``seconds`` from ``t0``; returns the end time.
+
+        Frames come at the sensor rate, one pipeline step per control cycle ``dt`` on the latest
+        frame; ``on_cycle(t, frame, aff)`` is called after every step.
+        """
         t = t0
         frame = None
         for _ in range(int(round(seconds / dt))):

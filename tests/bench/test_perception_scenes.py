@@ -1,4 +1,4 @@
-"""The MuJoCo scenes of the perception figures and benchmarks (scripts/perception_scenes.py,
+"""The MuJoCo scenes of the perception figures and benchmarks (bench/perception_scenes.py,
 scripts/bench_affordance_accuracy.py) and the scripts end to end on tiny budgets."""
 
 from __future__ import annotations
@@ -16,7 +16,8 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "scripts"))
 
 import bench_affordance_accuracy as acc  # noqa: E402
-from perception_scenes import (  # noqa: E402
+
+from neurocog_gym.bench.perception_scenes import (  # noqa: E402
     StaticScene,
     Variant,
     covered_area,
@@ -25,7 +26,6 @@ from perception_scenes import (  # noqa: E402
     walking_trial,
     write_section,
 )
-
 from neurocog_gym.robot.obstacles import Block  # noqa: E402
 
 ENV = {**os.environ, "PYTHONPATH": str(REPO), "MUJOCO_GL": "egl"}

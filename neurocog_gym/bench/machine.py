@@ -1,4 +1,4 @@
-"""What the benchmark scripts share: the machine line every report starts with.
+"""The machine line every benchmark report starts with (used by ``scripts/bench_*.py``).
 
 A figure without the machine it was measured on cannot be compared with anything; each script
 writes :func:`machine` (CPU model, logical CPUs, OS, Python and the versions of the packages
