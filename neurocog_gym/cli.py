@@ -73,7 +73,7 @@ def _cmd_demo(args) -> int:
             workers=args.workers,
         )  # fmt: skip
         print(f"\nObstacle benchmark, {args.trials} trials per scenario and policy "
-              f"(the README has the 200-trial tables):")  # fmt: skip
+              f"(the README has the 200-trial results):")  # fmt: skip
         print("\n".join(table))
         print(f"report: {report}")
     return 0

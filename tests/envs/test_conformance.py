@@ -27,7 +27,7 @@ def _rollout(env, seed, steps=120):
 
 # Gymnasium's checkers warn about every Box with an infinite bound; joint rates, velocities and
 # offsets have none, as in Gymnasium's own MuJoCo envs (Ant-v5 gets the same two warnings).
-# These are the only warnings accepted, documented in the README.
+# These are the only warnings accepted, documented in docs/environments.md.
 ACCEPTED_WARNINGS = {
     "A Box observation space maximum value is infinity. This is probably too high.",
     "A Box observation space minimum value is -infinity. This is probably too low.",
