@@ -75,6 +75,9 @@ class Args:
     """box: interrupt per rad of pool-angle error."""
     kd: float = 0.15
     """box: interrupt per rad/s."""
+    sag: float = 0.0
+    """Walking provision s_SAG for t_lift + t_carry + t_drop from the lift-off (either primitive;
+    0: unchanged, -0.5: the trot marches in place)."""
 
 
 def leg_ik(dx: float, dz: float) -> tuple[float, float]:
@@ -135,6 +138,8 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
         sole = d.site_xpos[r.foot_site[0], 2] - R_FOOT
         fx = d.site_xpos[r.foot_site[0], 0]
         act[:] = 0.0
+        if a.sag and 0.0 <= t < t_path:
+            act[12] = a.sag
         if a.primitive == "interrupt" and state:
             if state == 1:
                 act[1], act[2] = 0.3, 1.0
