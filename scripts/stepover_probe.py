@@ -19,6 +19,10 @@ Primitives (``--primitive``):
   pool angles by two-segment inverse kinematics, and the interrupts are a PD law on them
   (``--kp``, ``--kd``, clipped to [-1, 1]).
 
+``--shift`` adds an abduction interrupt on the three standing legs while the FL leg is up
+(their feet move left under the body, the body right, off the lifted leg); ``--sag`` the
+walking provision s_SAG.
+
 Bodies (``--body``): ``v1`` (the shipped assets) or ``knee-behind``
 (``neurocog_gym.robot.variants.knee_behind``, with ``--gait``, a ``TrotDesign`` JSON, e.g.
 ``docs/data/gait_knee_behind_candidate.json``).
@@ -75,6 +79,9 @@ class Args:
     """box: interrupt per rad of pool-angle error."""
     kd: float = 0.15
     """box: interrupt per rad/s."""
+    shift: float = 0.0
+    """Abduction interrupt of the three standing legs while the FL leg steps over (+: their feet
+    move left under the body, the body right, away from the lifted leg)."""
     sag: float = 0.0
     """Walking provision s_SAG for t_lift + t_carry + t_drop from the lift-off (either primitive;
     0: unchanged, -0.5: the trot marches in place)."""
@@ -140,6 +147,8 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
         act[:] = 0.0
         if a.sag and 0.0 <= t < t_path:
             act[12] = a.sag
+        if a.shift and 0.0 <= t < t_path:
+            act[[3, 6, 9]] = a.shift
         if a.primitive == "interrupt" and state:
             if state == 1:
                 act[1], act[2] = 0.3, 1.0
