@@ -140,6 +140,7 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
     z_apex, x_land = height + R_FOOT + a.apex, far + R_FOOT + a.land
     t_path = a.t_lift + a.t_carry + a.t_drop
     state, first = 1, None
+    over = []  # FL foot's lateral offset from the block's centre line while above the block
     for _ in range(90):
         t = d.time - t_lift
         sole = d.site_xpos[r.foot_site[0], 2] - R_FOOT
@@ -176,6 +177,9 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
             for j in range(2):
                 act[1 + j] = np.clip(a.kp * (want[j] - have[j]) - a.kd * rate[j], -1.0, 1.0)
         env.step(act)
+        foot = d.site_xpos[r.foot_site[0]]
+        if near - R_FOOT <= foot[0] <= far + R_FOOT:
+            over.append(float(foot[1] - foot0[1]))
         for i in range(d.ncon):
             con = d.contact[i]
             if first is None and block in (con.geom1, con.geom2):
@@ -187,7 +191,11 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
         env.step(np.zeros(15))
     upright = bool(d.xmat[r.torso_body][8] > 0.5)
     env.close()
-    return {"first_touch": first, "past_far_face_m": round(beyond, 3), "upright": upright}
+    # Over, not round: the whole sole stayed above the top face (its centre within the half width
+    # of 10 cm less the sole radius) while the foot crossed the block.
+    lateral = max((abs(v) for v in over), default=np.inf)
+    return {"first_touch": first, "past_far_face_m": round(beyond, 3), "upright": upright,
+            "lateral_m": round(lateral, 3), "over": bool(lateral < 0.10 - R_FOOT)}  # fmt: skip
 
 
 def _prepare_body(a: Args) -> None:
@@ -229,8 +237,8 @@ def main(argv: list[str] | None = None) -> None:
     import neurocog_gym  # noqa: F401  (registers the env ids, after the assets are chosen)
 
     print("| seed | gap, cm | height, cm | length, cm | first FL touch (s after lift-off) | "
-          "foot past far face, cm | upright |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|")
+          "foot past far face, cm | upright | widest sideways while crossing, cm |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|")
     clean = n = 0
     for seed in range(a.seeds):
         for gap in (0.02, 0.04, 0.06):
@@ -238,13 +246,17 @@ def main(argv: list[str] | None = None) -> None:
                 res = probe(a, seed, gap, h, length)
                 touch = res["first_touch"]
                 up = "yes" if res["upright"] else "no"
-                ok = touch is None and res["past_far_face_m"] > 0 and res["upright"]
+                ok = touch is None and res["past_far_face_m"] > 0 and res["upright"] and res["over"]
                 clean += ok
                 n += 1
+                side = res["lateral_m"] * 100
                 print(f"| {seed} | {gap * 100:.0f} | {h * 100:.0f} | {length * 100:.0f} | "
                       f"{'-' if touch is None else f'{touch[0]} ({touch[1]:.2f})'} | "
-                      f"{res['past_far_face_m'] * 100:.1f} | {up} |")  # fmt: skip
-    print(f"\nclean FL step-overs (no FL touch, foot past the far face, upright): {clean} / {n}")
+                      f"{res['past_far_face_m'] * 100:.1f} | {up} | {side:.1f} |")  # fmt: skip
+    print(
+        f"\nclean FL step-overs (no FL touch, the sole over the top face, foot past the far "
+        f"face, upright): {clean} / {n}"
+    )
 
 
 if __name__ == "__main__":
