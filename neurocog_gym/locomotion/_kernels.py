@@ -179,7 +179,13 @@ def motor_neuron_step(
             qd = 0.0
         q_ref[i] = q
         qd_ref[i] = qd
-    for i in range(n):
+    servo_targets(q_ref, coupling, joint_lo, joint_hi, target_out)
+
+
+@njit(cache=True)
+def servo_targets(q_ref, coupling, joint_lo, joint_hi, target_out):
+    """Pool angles to servo targets: q_ref_j + coupling_j q_ref_j+1 within the joint limits."""
+    for i in range(q_ref.shape[0]):
         t = q_ref[i]
         if coupling[i] != 0.0:
             t += coupling[i] * q_ref[i + 1]

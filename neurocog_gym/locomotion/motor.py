@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from neurocog_gym.locomotion._kernels import motor_neuron_step
+from neurocog_gym.locomotion._kernels import motor_neuron_step, servo_targets
 
 
 def _twelve(value: float) -> tuple[float, ...]:
@@ -132,9 +132,7 @@ class MotorNeuronPools:
         self.q_ref[:] = q0
         self.qd_ref[:] = 0.0
         self.acc[:] = 0.0
-        c = self.coupling
-        self.target[:] = np.clip(self.q_ref + c * np.roll(self.q_ref, -1), self.joint_lo,
-                                 self.joint_hi)  # fmt: skip
+        servo_targets(self.q_ref, self.coupling, self.joint_lo, self.joint_hi, self.target)
 
     def step(self, drive, interrupt, theta, theta_dot, touch) -> np.ndarray:
         """One control cycle; returns the (12,) servo targets in joint angles (``self.target``).
