@@ -1,13 +1,15 @@
-"""SpinVecEnv: stable-baselines3's ``VecEnv`` on :class:`neurocog_gym.envs.vector.SpinVectorEnv`.
+"""stable-baselines3 VecEnvs on our vector envs: :class:`SpinVecEnv` and :class:`BatchVecEnv`.
 
 SB3 trains on its own vector-env API (``step_async`` / ``step_wait``, same-step resets with the
 last observation in ``info["terminal_observation"]``, a list of infos). Its ``SubprocVecEnv``
 sends every step through pipes to sleeping workers, which on this 2-core machine costs more than
 the sub-millisecond obstacle-env step it parallelises
-(``docs/generated/benchmarks_env.md``). This class
+(``docs/generated/benchmarks_env.md``). :class:`SpinVecEnv`
 gives SB3 the same workers as ``SpinVectorEnv`` — env 0 in the training process, the others in
-processes that wait by spinning on shared memory — with the results of SB3's ``DummyVecEnv``
-on the same env factories (``tests/ecosystem/test_spin_vector.py``).
+processes that wait by spinning on shared memory — and :class:`BatchVecEnv` the threads of
+:class:`neurocog_gym.envs.batch.BatchVectorEnv` (no process, no pickling); both give the results
+of SB3's ``DummyVecEnv`` on the same env factories (``tests/ecosystem/test_spin_vector.py``,
+``tests/ecosystem/test_batch_vector.py``).
 
     from stable_baselines3.common.env_util import make_vec_env
     from neurocog_gym.envs.sb3_vec import SpinVecEnv
@@ -26,6 +28,7 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv
 from stable_baselines3.common.vec_env.patch_gym import _patch_env
 
+from neurocog_gym.envs.batch import BatchVectorEnv
 from neurocog_gym.envs.vector import SpinVectorEnv, _SameStepSlot
 
 
@@ -57,6 +60,12 @@ class _Core(SpinVectorEnv):
     _slot_class = _SameStepSlot
 
 
+class _BatchCore(BatchVectorEnv):
+    """BatchVectorEnv whose sub-envs step as SB3's (same-step reset)."""
+
+    _slot_class = _SameStepSlot
+
+
 class _Patched:
     """An env factory that passes the env through SB3's ``_patch_env``, as its vec envs do."""
 
@@ -67,41 +76,13 @@ class _Patched:
         return _patch_env(self.fn())
 
 
-class SpinVecEnv(VecEnv):
-    """stable-baselines3 ``VecEnv`` whose sub-envs step in parallel, as :class:`SpinVectorEnv`.
+class _OverVectorEnv(VecEnv):
+    """SB3's ``VecEnv`` over one of our vector envs built with ``_SameStepSlot`` sub-envs."""
 
-    Args:
-        env_fns: callables that each make one env (the first is called in this process).
-        spin_seconds: see :class:`SpinVectorEnv` (None: 2 ms when every env has a core).
-        payload_bytes: see :class:`SpinVectorEnv` (each message carries a step's info, and the
-            last observation of a finished episode).
-        context: multiprocessing start method (None: the platform's default).
-    """
-
-    def __init__(
-        self,
-        env_fns: Sequence[Callable[[], gym.Env]],
-        spin_seconds: float | None = None,
-        payload_bytes: int = 1 << 20,
-        context: str | None = None,
-    ):
-        self._vec = _Core(
-            [_Patched(fn) for fn in env_fns],
-            copy=True,
-            autoreset_mode="Disabled",
-            spin_seconds=spin_seconds,
-            payload_bytes=payload_bytes,
-            context=context,
-        )
+    def __init__(self, vec):
+        self._vec = vec
         self._actions: np.ndarray | None = None
-        super().__init__(
-            len(env_fns), self._vec.single_observation_space, self._vec.single_action_space
-        )
-
-    @property
-    def spin_seconds(self) -> float:
-        """The spin budget in use, s."""
-        return self._vec.spin_seconds
+        super().__init__(vec.num_envs, vec.single_observation_space, vec.single_action_space)
 
     def _indices(self, indices) -> list[int]:
         if indices is None:
@@ -131,12 +112,16 @@ class SpinVecEnv(VecEnv):
             raise RuntimeError("step_wait called without step_async")
         actions, self._actions = self._actions, None
         obs, infos = self._vec._step_each(np.asarray(actions))
-        infos[0] = deepcopy(infos[0])  # the workers' infos arrive as fresh copies already
+        infos = self._own_infos(infos)
         dones = self._vec._terminations | self._vec._truncations
         for i, info in enumerate(infos):
             if _SameStepSlot.RESET_INFO in info:
                 self.reset_infos[i] = info.pop(_SameStepSlot.RESET_INFO)
         return obs, np.copy(self._vec._rewards).astype(np.float32), dones, infos
+
+    def _own_infos(self, infos: list[dict]) -> list[dict]:
+        """Infos the sub-envs keep no reference to (``DummyVecEnv`` returns deep copies)."""
+        return deepcopy(infos)
 
     def close(self) -> None:
         """Close the sub-envs and stop the workers."""
@@ -165,4 +150,61 @@ class SpinVecEnv(VecEnv):
         return self._vec._apply(_render, range(self.num_envs))
 
 
-__all__ = ["SpinVecEnv"]
+class SpinVecEnv(_OverVectorEnv):
+    """stable-baselines3 ``VecEnv`` whose sub-envs step in parallel, as :class:`SpinVectorEnv`.
+
+    Args:
+        env_fns: callables that each make one env (the first is called in this process).
+        spin_seconds: see :class:`SpinVectorEnv` (None: 2 ms when every env has a core).
+        payload_bytes: see :class:`SpinVectorEnv` (each message carries a step's info, and the
+            last observation of a finished episode).
+        context: multiprocessing start method (None: the platform's default).
+    """
+
+    def __init__(
+        self,
+        env_fns: Sequence[Callable[[], gym.Env]],
+        spin_seconds: float | None = None,
+        payload_bytes: int = 1 << 20,
+        context: str | None = None,
+    ):
+        vec = _Core(
+            [_Patched(fn) for fn in env_fns],
+            copy=True,
+            autoreset_mode="Disabled",
+            spin_seconds=spin_seconds,
+            payload_bytes=payload_bytes,
+            context=context,
+        )
+        super().__init__(vec)
+
+    def _own_infos(self, infos: list[dict]) -> list[dict]:
+        infos[0] = deepcopy(infos[0])  # the workers' infos arrive as fresh copies already
+        return infos
+
+    @property
+    def spin_seconds(self) -> float:
+        """The spin budget in use, s."""
+        return self._vec.spin_seconds
+
+
+class BatchVecEnv(_OverVectorEnv):
+    """stable-baselines3 ``VecEnv`` whose sub-envs step on threads, as :class:`BatchVectorEnv`.
+
+    Args:
+        env_fns: callables that each make one env (called in order in this thread).
+        num_threads: see :class:`neurocog_gym.envs.batch.BatchVectorEnv` (None: one per CPU).
+    """
+
+    def __init__(self, env_fns: Sequence[Callable[[], gym.Env]], num_threads: int | None = None):
+        super().__init__(
+            _BatchCore(
+                [_Patched(fn) for fn in env_fns],
+                num_threads=num_threads,
+                copy=True,
+                autoreset_mode="Disabled",
+            )
+        )
+
+
+__all__ = ["BatchVecEnv", "SpinVecEnv"]
