@@ -455,7 +455,10 @@ def _rotate_rays(dirs_t, site_xmat, site_ids, out):  # pragma: no cover - compil
             out[s, 2, k] = r6 * d0 + r7 * d1 + r8 * d2
 
 
-@njit(cache=True)
+# nogil: the two kernels of a frame that run long enough (0.02-0.4 ms) for another thread to
+# use the GIL meanwhile (BatchVectorEnv steps sub-envs on threads); the short ones keep it, a
+# GIL hand-over costs tens of microseconds.
+@njit(cache=True, nogil=True)
 def _pack(
     vec,
     cos_axis,
@@ -714,7 +717,7 @@ def _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, x, dist, geomid):  # pragma: n
             geomid[s, k] = g
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _cast_primitives(
     dirs_t,
     cone_cos,
