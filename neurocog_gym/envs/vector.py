@@ -8,8 +8,11 @@ is the wake-ups and round trips, not the cores (two free env processes: 1.9-2.0 
 
 What this one does instead:
 
-* env 0 steps in the calling process, while envs 1..n-1 step in worker processes at the same
-  time (a 2-env vector env needs one worker, not two);
+* the sub-envs are split into one contiguous group per core (``processes``): the first group
+  steps in the calling process, while each other group steps in a worker process at the same
+  time, one env after the other (a 2-env vector env needs one worker, not two; 8 envs on 2
+  cores are two groups of 4, so each lock-step turn lasts 4 env steps, and the spread of single
+  step times averages out over them);
 * observations go through Gymnasium's shared-memory layout
   (``gymnasium.vector.utils.create_shared_memory``), written through views made once; a Box
   action through a shared row per worker; rewards, flags and ``info`` through a per-worker
@@ -264,18 +267,18 @@ class _BatchedInfos:
         return out
 
 
-def _action_view(raw, space: gym.Space) -> np.ndarray | None:
-    """The shared action row of a worker (Box / discrete action spaces), or None (pickled)."""
+def _action_view(raw, space: gym.Space, k: int) -> np.ndarray | None:
+    """The shared action rows of a worker's ``k`` envs (Box / discrete spaces), or None."""
     if raw is None:
         return None
-    return np.frombuffer(raw, dtype=space.dtype).reshape(space.shape)
+    return np.frombuffer(raw, dtype=space.dtype).reshape((k, *space.shape))
 
 
-def _shared_action_raw(ctx, space: gym.Space):
-    """A shared buffer for one action of ``space``, or None where actions go pickled."""
+def _shared_action_raw(ctx, space: gym.Space, k: int):
+    """A shared buffer for ``k`` actions of ``space``, or None where actions go pickled."""
     if not isinstance(space, _ObsWriter._BASE) or space.shape is None:
         return None
-    n = int(np.prod(space.shape, dtype=np.int64)) * np.dtype(space.dtype).itemsize
+    n = k * int(np.prod(space.shape, dtype=np.int64)) * np.dtype(space.dtype).itemsize
     return ctx.RawArray("B", max(n, 1))
 
 
@@ -295,8 +298,8 @@ def _get(buf: np.ndarray, ctrl: np.ndarray):
 
 
 def _worker(
-    index,
-    env_fn,
+    indices,
+    env_fns,
     ctrl_raw,
     buf_raw,
     act_raw,
@@ -309,11 +312,12 @@ def _worker(
     parent,
     slot_class=_Slot,
 ):
+    """A worker process: makes the sub-envs ``indices`` and steps them, one after the other."""
     writer = _ObsWriter(space, shm, num_envs)
-    act = _action_view(act_raw, act_space)
+    act = _action_view(act_raw, act_space, len(indices))
     ctrl = np.frombuffer(ctrl_raw, dtype=np.int64)
     buf = np.frombuffer(buf_raw, dtype=np.uint8)
-    slot = None
+    slots: list[_Slot] = []
     # the parent may send its first command before this process gets here: the count starts at 0
     seen = 0
     # fork and spawn: the vector env's process is this one's parent (reparented when it dies);
@@ -323,8 +327,11 @@ def _worker(
     def parent_alive() -> bool:
         return os.getppid() == parent if direct else _alive(parent)
 
+    current = indices[0]
     try:
-        slot = slot_class(env_fn.fn(), mode)
+        for i, fn in zip(indices, env_fns.fn, strict=True):
+            current = i
+            slots.append(slot_class(fn(), mode))
         while True:
             # wait for the next command: spin, then poll (and leave if the parent is gone)
             if ctrl[_CMD_SEQ] == seen:
@@ -342,74 +349,105 @@ def _worker(
                         return
             seen = int(ctrl[_CMD_SEQ])
             cmd = int(ctrl[_CMD])
+            current = indices[0]
             try:
                 if cmd == _STEP:
-                    action = _get(buf, ctrl) if act is None else act.copy()
-                    obs, reward, terminated, truncated, info = slot.step(action)
-                    writer.write(index, obs)
-                    _put(buf, ctrl, (reward, terminated, truncated, info))
+                    actions = _get(buf, ctrl) if act is None else act.copy()
+                    answers = []
+                    for j, i in enumerate(indices):
+                        current = i
+                        obs, reward, terminated, truncated, info = slots[j].step(actions[j])
+                        writer.write(i, obs)
+                        answers.append((reward, terminated, truncated, info))
+                    _put(buf, ctrl, answers)
                 elif cmd == _RESET:
-                    seed, options = _get(buf, ctrl)
-                    obs, info = slot.reset(seed, options)
-                    writer.write(index, obs)
-                    _put(buf, ctrl, info)
+                    seeds, options, mask = _get(buf, ctrl)
+                    infos = []
+                    for j, i in enumerate(indices):
+                        current = i
+                        if mask[j]:
+                            obs, info = slots[j].reset(seeds[j], options)
+                            writer.write(i, obs)
+                            infos.append(info)
+                        else:
+                            infos.append(None)
+                    _put(buf, ctrl, infos)
                 elif cmd == _CALL:
-                    _put(buf, ctrl, slot.call(*_get(buf, ctrl)))
+                    name, args, kwargs = _get(buf, ctrl)
+                    results = []
+                    for j, i in enumerate(indices):
+                        current = i
+                        results.append(slots[j].call(name, args, kwargs))
+                    _put(buf, ctrl, results)
                 elif cmd == _APPLY:
-                    fn, args, kwargs = _get(buf, ctrl)
-                    _put(buf, ctrl, fn(slot.env, *args, **kwargs))
+                    fn, calls, kwargs = _get(buf, ctrl)
+                    results = {}
+                    for i, args in calls.items():
+                        current = i
+                        results[i] = fn(slots[i - indices[0]].env, *args, **kwargs)
+                    _put(buf, ctrl, results)
                 elif cmd == _SET:
-                    name, value = _get(buf, ctrl)
-                    setattr(slot.env, name, value)
+                    name, values = _get(buf, ctrl)
+                    for j, i in enumerate(indices):
+                        current = i
+                        setattr(slots[j].env, name, values[j])
                     _put(buf, ctrl, None)
                 elif cmd == _CLOSE:
-                    slot.env.close()
-                    slot = None
+                    for slot in slots:
+                        slot.env.close()
+                    slots = []
                     _put(buf, ctrl, None)
                 ctrl[_STATUS] = _OK
             except Exception as e:
-                _put(buf, ctrl, f"{type(e).__name__}: {e}\n{traceback.format_exc()}")
+                message = f"{type(e).__name__}: {e}\n{traceback.format_exc()}"
+                _put(buf, ctrl, (current, message))
                 ctrl[_STATUS] = _ERROR
             ctrl[_DONE_SEQ] = seen
             if cmd == _CLOSE:
                 return
     except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: leave quietly
         return
-    except Exception as e:  # the factory failed: report it on the first command
-        message = f"creating env {index} failed: {type(e).__name__}: {e}\n{traceback.format_exc()}"
+    except Exception as e:  # a factory failed: report it on the first command
+        message = (
+            f"creating env {current} failed: {type(e).__name__}: {e}\n{traceback.format_exc()}"
+        )
         while parent_alive():
             if ctrl[_CMD_SEQ] != seen:
                 seen = int(ctrl[_CMD_SEQ])
-                _put(buf, ctrl, message)
+                _put(buf, ctrl, (None, message))
                 ctrl[_STATUS] = _ERROR
                 ctrl[_DONE_SEQ] = seen
                 if int(ctrl[_CMD]) == _CLOSE:
                     return
             time.sleep(_SLEEP)
     finally:
-        if slot is not None:
+        for slot in slots:
             slot.env.close()
 
 
 class SpinVectorEnv(_BatchedInfos, VectorEnv):
-    """Lock-step vector env: env 0 in this process, the others in spinning worker processes.
+    """Lock-step vector env: the sub-envs in groups, one in this process, the others in workers.
 
     A drop-in for ``gymnasium.vector.AsyncVectorEnv`` / ``SyncVectorEnv`` when single steps are
     sub-millisecond and cores are few (see the module docstring for why and how).
 
     Args:
-        env_fns: callables that each make one env (the first is called in this process).
+        env_fns: callables that each make one env (those of the first group are called in this
+            process, the others in the workers).
         copy: return copies of the observations (True) or views of the shared buffers that the
             next ``step`` or ``reset`` overwrites (False).
         autoreset_mode: ``"NextStep"`` (Gymnasium's default) or ``"Disabled"``.
         spin_seconds: how long either side busy-waits for the other before it polls with short
-            sleeps, s. None: 2 ms when every process has a core of its own (``num_envs`` ≤ the
+            sleeps, s. None: 2 ms when every process has a core of its own (``processes`` ≤ the
             CPUs this process may use), else 0 (spinning processes would take turns on a core).
         payload_bytes: size of each worker's shared message buffer (actions, ``info``), bytes.
         context: multiprocessing start method (None: the platform's default).
+        processes: processes that step the sub-envs, this one included, each a contiguous
+            group of them (None: one per CPU this process may use, at most ``num_envs``).
 
     Attributes:
         spin_seconds: the spin budget in use.
+        groups: the sub-env indices of each process, this one's first.
     """
 
     _slot_class: type[_Slot] = _Slot
@@ -422,6 +460,7 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
         spin_seconds: float | None = None,
         payload_bytes: int = 1 << 20,
         context: str | None = None,
+        processes: int | None = None,
     ):
         super().__init__()
         env_fns = list(env_fns)
@@ -434,21 +473,30 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
             )
         if payload_bytes < 1024:
             raise ValueError(f"payload_bytes must be at least 1024, got {payload_bytes}")
+        if processes is not None and (
+            not isinstance(processes, int) or isinstance(processes, bool) or processes < 1
+        ):
+            raise ValueError(f"processes must be a positive integer or None, got {processes!r}")
         self.num_envs = len(env_fns)
         self.copy = copy
         self.autoreset_mode = mode
+        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+        cpus = cpus or os.cpu_count() or 1
+        processes = min(self.num_envs, cpus if processes is None else processes)
+        bounds = np.linspace(0, self.num_envs, processes + 1).round().astype(int)
+        self.groups = [range(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         if spin_seconds is None:
-            cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
-            cpus = cpus or os.cpu_count() or 1
-            spin_seconds = 2e-3 if self.num_envs <= cpus else 0.0
+            spin_seconds = 2e-3 if processes <= cpus else 0.0
         if spin_seconds < 0:
             raise ValueError(f"spin_seconds must be >= 0, got {spin_seconds}")
         self.spin_seconds = float(spin_seconds)
         self._closed = True
         self._procs: list = []
+        self._slots: list[_Slot] = []
 
-        self._slot = self._slot_class(env_fns[0](), mode)
-        env = self._slot.env
+        for fn in env_fns[: len(self.groups[0])]:
+            self._slots.append(self._slot_class(fn(), mode))
+        env = self._slots[0].env
         self.metadata = dict(env.metadata)
         self.metadata["autoreset_mode"] = mode
         self.render_mode = env.render_mode
@@ -463,19 +511,19 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
         self._writer = _ObsWriter(self.single_observation_space, self._shm, self.num_envs)
         self._ctrl, self._buf, self._act = [], [], []
         self._closed = False
-        for i, fn in enumerate(env_fns[1:], start=1):
+        for k, group in enumerate(self.groups[1:], start=1):
             ctrl_raw = ctx.RawArray("q", 5)
             buf_raw = ctx.RawArray("B", int(payload_bytes))
-            act_raw = _shared_action_raw(ctx, self.single_action_space)
+            act_raw = _shared_action_raw(ctx, self.single_action_space, len(group))
             self._ctrl.append(np.frombuffer(ctrl_raw, dtype=np.int64))
             self._buf.append(np.frombuffer(buf_raw, dtype=np.uint8))
-            self._act.append(_action_view(act_raw, self.single_action_space))
+            self._act.append(_action_view(act_raw, self.single_action_space, len(group)))
             proc = ctx.Process(
                 target=_worker,
-                name=f"SpinVectorEnv-{i}",
+                name=f"SpinVectorEnv-{k}",
                 args=(
-                    i,
-                    CloudpickleWrapper(fn),
+                    group,
+                    CloudpickleWrapper([env_fns[i] for i in group]),
                     ctrl_raw,
                     buf_raw,
                     act_raw,
@@ -502,21 +550,31 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
             self.close()
             raise
 
+    @property
+    def _workers(self) -> range:
+        return range(len(self._procs))
+
     def _check_spaces(self) -> None:
-        """Every worker made its env (its errors surface here) with env 0's spaces."""
-        for k in range(self.num_envs - 1):
+        """Every env was made (its errors surface here) with env 0's spaces."""
+        for k in self._workers:
             self._send(k, _CALL, ("observation_space", (), {}))
-        for k in range(self.num_envs - 1):
-            if self._receive(k) != self.single_observation_space:
+        found = [slot.env.observation_space for slot in self._slots]
+        for answer in self._gather(self._workers).values():
+            found += answer
+        for i, space in enumerate(found):
+            if space != self.single_observation_space:
                 raise RuntimeError(
-                    f"env {k + 1} has another observation space than env 0; SpinVectorEnv "
+                    f"env {i} has another observation space than env 0; SpinVectorEnv "
                     "batches identical spaces only"
                 )
-        for k in range(self.num_envs - 1):
+        for k in self._workers:
             self._send(k, _CALL, ("action_space", (), {}))
-        for k in range(self.num_envs - 1):
-            if self._receive(k) != self.single_action_space:
-                raise RuntimeError(f"env {k + 1} has another action space than env 0")
+        found = [slot.env.action_space for slot in self._slots]
+        for answer in self._gather(self._workers).values():
+            found += answer
+        for i, space in enumerate(found):
+            if space != self.single_action_space:
+                raise RuntimeError(f"env {i} has another action space than env 0")
 
     # -- the worker protocol ----------------------------------------------------------------------
 
@@ -525,6 +583,10 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
         _put(self._buf[k], ctrl, payload)
         ctrl[_CMD] = cmd
         ctrl[_CMD_SEQ] += 1
+
+    def _group_name(self, k: int) -> str:
+        group = self.groups[k + 1]
+        return f"env {group[0]}" if len(group) == 1 else f"envs {group[0]}-{group[-1]}"
 
     def _receive(self, k: int):
         ctrl, proc = self._ctrl[k], self._procs[k]
@@ -543,12 +605,15 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
                 if not proc.is_alive() and ctrl[_DONE_SEQ] != target:
                     self._closed = True
                     raise RuntimeError(
-                        f"SpinVectorEnv worker for env {k + 1} exited "
+                        f"SpinVectorEnv worker for {self._group_name(k)} exited "
                         f"(exit code {proc.exitcode}) without answering"
                     )
         result = _get(self._buf[k], ctrl)
         if ctrl[_STATUS] == _ERROR:
-            raise RuntimeError(f"SpinVectorEnv env {k + 1} raised: {result}")
+            index, message = result
+            if index is None:  # making an env failed; the message names it
+                raise RuntimeError(f"SpinVectorEnv {message}")
+            raise RuntimeError(f"SpinVectorEnv env {index} raised: {message}")
         return result
 
     def _gather(self, ks) -> dict:
@@ -614,16 +679,29 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
                     f"options['reset_mask'] must be a bool array of shape ({self.num_envs},) "
                     f"with at least one True value, got {mask!r}"
                 )
-        ks = [k for k in range(self.num_envs - 1) if mask[k + 1]]
+        ks = [k for k in self._workers if mask[self.groups[k + 1]].any()]
         for k in ks:
-            self._send(k, _RESET, (seed[k + 1], options))
+            group = self.groups[k + 1]
+            self._send(k, _RESET, ([seed[i] for i in group], options, mask[group].tolist()))
+
+        def local() -> list:
+            infos = []
+            for i, slot in zip(self.groups[0], self._slots, strict=True):
+                if mask[i]:
+                    obs, info = slot.reset(seed[i], options)
+                    self._writer.write(i, obs)
+                    infos.append(info)
+                else:
+                    infos.append(None)
+            return infos
+
+        answers = {-1: self._local(ks, local)}
+        answers.update(self._gather(ks))
         infos: dict[str, Any] = {}
-        if mask[0]:
-            obs, info = self._local(ks, self._slot.reset, seed[0], options)
-            self._writer.write(0, obs)
-            infos = self._add_info(infos, info, 0)
-        for k, info in self._gather(ks).items():
-            infos = self._add_info(infos, info, k + 1)
+        for k in sorted(answers):
+            for i, info in zip(self.groups[k + 1], answers[k], strict=True):
+                if info is not None:
+                    infos = self._add_info(infos, info, i)
         self._terminations[mask] = False
         self._truncations[mask] = False
         return self._copy_obs(), infos
@@ -654,31 +732,36 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
         Rewards and flags are left in ``self._rewards``, ``_terminations``, ``_truncations``.
         """
         actions = list(iterate(self.action_space, actions))
-        for k in range(self.num_envs - 1):
-            act = self._act[k]
+        for k in self._workers:
+            group, act = self.groups[k + 1], self._act[k]
             if act is None:
-                self._send(k, _STEP, actions[k + 1])
+                self._send(k, _STEP, [actions[i] for i in group])
             else:
-                act[...] = actions[k + 1]
+                for j, i in enumerate(group):
+                    act[j] = actions[i]
                 ctrl = self._ctrl[k]
                 ctrl[_CMD] = _STEP
                 ctrl[_CMD_SEQ] += 1
-        workers = range(self.num_envs - 1)
-        obs, reward, terminated, truncated, info = self._local(workers, self._slot.step, actions[0])
-        self._writer.write(0, obs)
-        self._rewards[0], self._terminations[0], self._truncations[0] = (
-            reward,
-            terminated,
-            truncated,
-        )
-        infos = [info]
-        answers = self._gather(workers)
-        for k in workers:
-            reward, terminated, truncated, info = answers[k]
-            self._rewards[k + 1] = reward
-            self._terminations[k + 1] = terminated
-            self._truncations[k + 1] = truncated
-            infos.append(info)
+
+        def local() -> list:
+            answers = []
+            for i, slot in zip(self.groups[0], self._slots, strict=True):
+                obs, reward, terminated, truncated, info = slot.step(actions[i])
+                self._writer.write(i, obs)
+                answers.append((reward, terminated, truncated, info))
+            return answers
+
+        answers = {-1: self._local(self._workers, local)}
+        answers.update(self._gather(self._workers))
+        infos = []
+        for k in range(-1, len(self._procs)):
+            for i, (reward, terminated, truncated, info) in zip(
+                self.groups[k + 1], answers[k], strict=True
+            ):
+                self._rewards[i] = reward
+                self._terminations[i] = terminated
+                self._truncations[i] = truncated
+                infos.append(info)
         return self._copy_obs(), infos
 
     def _apply(self, fn: Callable, indices: Sequence[int], *args, **kwargs) -> list:
@@ -694,16 +777,24 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
         for i in calls:
             if not 0 <= i < self.num_envs:
                 raise IndexError(f"env index {i} out of range for {self.num_envs} envs")
-        for i, args in calls.items():
-            if i > 0:
-                self._send(i - 1, _APPLY, (fn, args, kwargs))
-        ks = [i - 1 for i in calls if i > 0]
-        results = {}
-        if 0 in calls:
-            results[0] = self._local(ks, fn, self._slot.env, *calls[0], **kwargs)
-        for k, value in self._gather(ks).items():
-            results[k + 1] = value
-        return results
+        ks = []
+        for k in self._workers:
+            mine = {i: args for i, args in calls.items() if i in self.groups[k + 1]}
+            if mine:
+                self._send(k, _APPLY, (fn, mine, kwargs))
+                ks.append(k)
+
+        def local() -> dict:
+            return {
+                i: fn(self._slots[i].env, *args, **kwargs)
+                for i, args in calls.items()
+                if i in self.groups[0]
+            }
+
+        results = self._local(ks, local)
+        for value in self._gather(ks).values():
+            results.update(value)
+        return {i: results[i] for i in calls}
 
     def _copy_obs(self):
         """The batched observation: a copy (``copy=True``) or the shared views themselves."""
@@ -716,12 +807,15 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
     def call(self, name: str, *args, **kwargs) -> tuple:
         """Call method ``name`` (or read attribute ``name``) of every sub-env."""
         self._check_open()
-        workers = range(self.num_envs - 1)
-        for k in workers:
+        for k in self._workers:
             self._send(k, _CALL, (name, args, kwargs))
-        first = self._local(workers, self._slot.call, name, args, kwargs)
-        answers = self._gather(workers)
-        return (first, *(answers[k] for k in workers))
+
+        def local() -> list:
+            return [slot.call(name, args, kwargs) for slot in self._slots]
+
+        first = self._local(self._workers, local)
+        answers = self._gather(self._workers)
+        return tuple(first + [x for k in self._workers for x in answers[k]])
 
     def get_attr(self, name: str) -> tuple:
         """Attribute ``name`` of every sub-env."""
@@ -734,11 +828,15 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
             values = [values] * self.num_envs
         if len(values) != self.num_envs:
             raise ValueError(f"set_attr needs {self.num_envs} values, got {len(values)}")
-        workers = range(self.num_envs - 1)
-        for k in workers:
-            self._send(k, _SET, (name, values[k + 1]))
-        self._local(workers, setattr, self._slot.env, name, values[0])
-        self._gather(workers)
+        for k in self._workers:
+            self._send(k, _SET, (name, [values[i] for i in self.groups[k + 1]]))
+
+        def local() -> None:
+            for i, slot in zip(self.groups[0], self._slots, strict=True):
+                setattr(slot.env, name, values[i])
+
+        self._local(self._workers, local)
+        self._gather(self._workers)
 
     def render(self):
         """Each sub-env's ``render()`` (a tuple), or None without a render mode."""
@@ -748,7 +846,7 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
 
     def close_extras(self, **kwargs) -> None:
         """Close the sub-envs and stop the workers."""
-        if getattr(self, "_slot", None) is None:
+        if not getattr(self, "_slots", None):
             return
         if not self._closed:
             for k, proc in enumerate(self._procs):
@@ -761,8 +859,9 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
                 proc.terminate()
                 proc.join(timeout=1.0)
         self._closed = True
-        self._slot.env.close()
-        self._slot = None
+        for slot in self._slots:
+            slot.env.close()
+        self._slots = []
 
     def __del__(self):
         if not getattr(self, "closed", True):

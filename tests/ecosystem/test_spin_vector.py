@@ -134,6 +134,40 @@ def test_obstacle_env_matches_sync_bit_for_bit_through_autoresets():
     _compare(fns, 150, seed=5)
 
 
+def test_grouped_sub_envs_match_sync_bit_for_bit():
+    # 5 envs in 2 processes (groups 0-2 here, 3-4 in the worker) and in 3 (2 workers)
+    fns = [_tiny(i, horizon=3 + i) for i in range(5)]
+    for processes in (2, 3):
+        envs = SpinVectorEnv(fns, processes=processes)
+        assert [list(g) for g in envs.groups][0][0] == 0 and len(envs.groups) == processes
+        _assert_same_rollouts(SyncVectorEnv(fns), envs, 25, seed=7, label=f"{processes} ")
+    obstacle = [lambda: gym.make(SUDDEN, max_episode_steps=40)] * 4
+    _compare(obstacle, 90, seed=3, processes=2)
+
+
+def test_grouped_call_set_attr_apply_and_errors_name_the_env():
+    envs = SpinVectorEnv([_tiny(i) for i in range(4)], processes=2)
+    try:
+        assert envs.get_attr("tag") == (0, 1, 2, 3)
+        envs.set_attr("horizon", [5, 6, 7, 8])
+        assert envs.get_attr("horizon") == (5, 6, 7, 8)
+        assert envs._apply(getattr, [3, 0, 2], "tag") == [3, 0, 2]
+        obs, info = envs.reset(seed=1, options={"reset_mask": np.array([0, 0, 1, 0], bool)})
+        assert info["_i"].tolist() == [False, False, True, False]
+    finally:
+        envs.close()
+    envs = SpinVectorEnv([_tiny(0), _tiny(1), _tiny(2), _tiny(3, fail_at=2)], processes=2)
+    try:
+        envs.reset(seed=0)
+        envs.step(np.zeros((4, 2), np.float32))
+        with pytest.raises(RuntimeError, match="env 3 raised: ValueError: tiny env 3 fails"):
+            envs.step(np.zeros((4, 2), np.float32))
+    finally:
+        envs.close()
+    with pytest.raises(ValueError, match="processes"):
+        SpinVectorEnv([_tiny()], processes=0)
+
+
 def test_make_vec_default_mode_is_spin_and_agrees_with_sync():
     spin = gym.make_vec(SUDDEN, num_envs=2, max_episode_steps=30)
     sync = gym.make_vec(SUDDEN, num_envs=2, vectorization_mode="sync", max_episode_steps=30)
@@ -268,10 +302,14 @@ def test_a_killed_worker_is_an_error_not_a_hang():
 
 
 def test_close_stops_the_workers_and_spin_budget_follows_the_cores():
+    cpus = len(os.sched_getaffinity(0))
+    crowded = SpinVectorEnv([_tiny(i) for i in range(3)], processes=cpus + 1)
+    assert crowded.spin_seconds == 0.0  # more processes than cores: no spinning
+    crowded.close()
     envs = SpinVectorEnv([_tiny(i) for i in range(3)])
     procs = list(envs._procs)
-    cpus = len(os.sched_getaffinity(0))
-    assert envs.spin_seconds == (2e-3 if 3 <= cpus else 0.0)
+    assert len(envs.groups) == min(3, cpus) == len(procs) + 1  # one process per core
+    assert envs.spin_seconds == 2e-3
     envs.reset(seed=0)
     envs.step(np.zeros((3, 2), np.float32))
     envs.close()
