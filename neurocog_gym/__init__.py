@@ -28,8 +28,8 @@ ENV_IDS: tuple[str, ...] = (
 
 # vector_entry_point: ``gymnasium.make_vec(id, n)`` (mode None or "vector_entry_point") gives a
 # SpinVectorEnv (neurocog_gym/envs/vector.py): the sync mode's sub-envs, stepped in parallel
-# processes that wait for each other by spinning on shared memory
-# (docs/generated/benchmarks_env.md says why).
+# processes that wait for each other by spinning on shared memory; ``vector_backend="threads"``
+# gives a BatchVectorEnv (envs/batch.py) on threads instead (docs/performance.md says which wins).
 register(
     id="NeuroCog/Walk-v1",
     entry_point="neurocog_gym.envs.walk:WalkEnv",

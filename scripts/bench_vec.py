@@ -3,7 +3,12 @@
 For each env id (default ``NeuroCog/SuddenObstacle-v1`` and ``NeuroCog/Walk-v1``) and each N
 (default 2 and 8), env steps/s of
 
-* one env stepped in this process (``gymnasium.make``), the reference of every ratio;
+* one env stepped in this process (``gymnasium.make``, its own episode);
+* one env at a time: the N envs of the vector rows, seeded and autoreset as ``SyncVectorEnv``
+  does it, stepped in turn in this process with no vector env — one env's speed on exactly the
+  episodes the vector rows step, the reference of their ratios (an obstacle episode's steps
+  cost more once the block is in view, and a reset with the map's warm-up costs some 50 steps,
+  so one env on another episode is a noisy reference);
 * ``gymnasium.make_vec(id, N, vectorization_mode="sync")``: Gymnasium's ``SyncVectorEnv``;
 * ``gymnasium.make_vec(id, N)``: the registered vector entry point's default, ``SpinVectorEnv``
   (env 0 in this process, the others in worker processes that wait on shared memory);
@@ -14,8 +19,8 @@ Zero actions (CPG walking); the vector envs autoreset, and a single env resets w
 ends, inside the timed steps. Each round steps every sub-env of every row the same number of
 times, so that all rows time the same stretch of their episodes. The rows are timed interleaved
 in rounds (so load from other processes falls on every row alike) and reported as medians over
-the rounds; each ratio is the median over rounds of the row's rate over the one-env rate of the
-same round (in brackets: the lowest and highest round). The load average (``uptime``) is
+the rounds; each ratio is the median over rounds of the row's rate over the reference's rate
+in the same round (in brackets: the lowest and highest round). The load average (``uptime``) is
 recorded before and after each id. Writes ``--out`` (docs/generated/benchmarks_vec.md).
 
     python scripts/bench_vec.py
@@ -102,6 +107,34 @@ def _one_env(env_id: str):
     return step, 1, env
 
 
+def _serial(env_id: str, n: int):
+    """N plain envs stepped one after another: one env's speed on the vector rows' episodes.
+
+    Seeded and autoreset as ``SyncVectorEnv`` (env i reset with seed i, a finished env resets on
+    its next step), so every vector row of this N steps these very episodes.
+    """
+    from gymnasium.vector.vector_env import AutoresetMode
+
+    from neurocog_gym.envs.vector import _Slot
+
+    slots = [_Slot(gym.make(env_id), AutoresetMode.NEXT_STEP) for _ in range(n)]
+    for i, slot in enumerate(slots):
+        slot.reset(i, None)
+    space = slots[0].env.action_space
+    zero = np.zeros(space.shape, space.dtype)
+
+    def step():
+        for slot in slots:
+            slot.step(zero)
+
+    class _Envs:
+        def close(self):
+            for slot in slots:
+                slot.env.close()
+
+    return step, n, _Envs()
+
+
 def _vector(env_id: str, n: int, **kwargs):
     envs = gym.make_vec(env_id, num_envs=n, **kwargs)
     envs.reset(seed=0)
@@ -118,6 +151,7 @@ def measure(env_id: str, args: Args) -> tuple[list[str], dict]:
     load0 = _uptime()
     rows: dict[str, tuple] = {"one env": _one_env(env_id)}
     for n in args.ns:
+        rows[f"serial {n}"] = _serial(env_id, n)
         rows[f"sync {n}"] = _vector(env_id, n, vectorization_mode="sync")
         rows[f"spin {n}"] = _vector(env_id, n)
         rows[f"batch {n}"] = _vector(env_id, n, vector_backend="threads")
@@ -142,9 +176,10 @@ def measure(env_id: str, args: Args) -> tuple[list[str], dict]:
         for _, _, env in rows.values():
             env.close()
     load1 = _uptime()
-    one = np.array(rates["one env"])
     med = {k: float(np.median(v)) for k, v in rates.items()}
-    ratio = {k: np.array(v) / one for k, v in rates.items()}
+    # each row of N against one env on the same N episodes, round by round
+    ratio = {k: np.array(v) / np.array(rates[f"serial {k.split()[-1]}"]) for k, v in rates.items()
+             if k != "one env"}  # fmt: skip
     lines = [
         f"### `{env_id}`",
         "",
@@ -156,9 +191,10 @@ def measure(env_id: str, args: Args) -> tuple[list[str], dict]:
         "",
         "| vector env | N | env steps/s | x one env (rounds) | target | met |",
         "|---|---:|---:|---:|---:|:-:|",
-        f"| one env (`gymnasium.make`) | 1 | {med['one env']:,.0f} | 1 | | |",
+        f"| one env (`gymnasium.make`), its own episode | 1 | {med['one env']:,.0f} | | | |",
     ]
     names = {
+        "serial": "one env at a time: the N envs stepped in turn, no vector env (the reference)",
         "sync": "`SyncVectorEnv` (`vectorization_mode='sync'`)",
         "spin": "`SpinVectorEnv` (`make_vec` default)",
         "batch": "`BatchVectorEnv` (`vector_backend='threads'`)",
@@ -190,7 +226,8 @@ def main(argv: list[str] | None = None) -> None:
         "",
         f"Command: `{cmd.strip()}`. Env steps/s over all sub-envs, zero actions, autoresets "
         "inside the timed steps; rows interleaved in rounds, medians over the rounds; ratios are "
-        "the medians of the per-round ratios to one env in the same round (lowest-highest "
+        "the medians of the per-round ratios to one env at a time on the same N episodes in "
+        "the same round (lowest-highest "
         "round in brackets). Targets: issue 24's for a batch env on 2 cores, beside the "
         "SpinVectorEnv and BatchVectorEnv rows.",
         "",

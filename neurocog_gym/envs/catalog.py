@@ -93,7 +93,8 @@ def format_text(desc: dict) -> str:
         f"{desc['id']}  ({desc['entry_point']})",
         f"  {desc['summary']}",
         f"  gymnasium.make_vec(id, n): {desc['vector_entry_point']} (SpinVectorEnv; "
-        "vectorization_mode='sync' / 'async' for Gymnasium's own)",
+        "vector_backend='threads' for BatchVectorEnv; vectorization_mode='sync' / 'async' for "
+        "Gymnasium's own)",
         f"  episode: {desc['max_episode_steps']} steps x {desc['dt']:g} s = "
         f"{desc['episode_seconds']:g} s (truncated by the time limit)",
         f"  action: {desc['action_space']}  (12 joint interrupts, 3 walking provisions)",

@@ -887,9 +887,9 @@ def make_spin_vector(env_id: str, num_envs: int = 1, **env_kwargs) -> SpinVector
 
 
 VECTOR_BACKENDS = ("spin", "threads")
-"""``vector_backend`` values of the vector entry points: :class:`SpinVectorEnv` (the default: it
-steps the obstacle envs 1.6-1.9 x faster than the threads do on 2 cores,
-``docs/generated/benchmarks_vec.md``) or :class:`neurocog_gym.envs.batch.BatchVectorEnv`."""
+"""``vector_backend`` values of the vector entry points: :class:`SpinVectorEnv` (the default: on
+2 cores it steps 2 and 8 envs 1.5-2 x faster than the threads do, ``docs/performance.md``) or
+:class:`neurocog_gym.envs.batch.BatchVectorEnv`."""
 
 
 def make_vector(

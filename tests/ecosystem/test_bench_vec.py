@@ -16,7 +16,8 @@ def test_writes_every_row_with_machine_command_and_load(tmp_path):
     assert r.returncode == 0, r.stderr
     text = out.read_text()
     for row in ("Machine:", "Command: `python scripts/bench_vec.py --ids", "`uptime` before",
-                "| one env (`gymnasium.make`) | 1 |", "`SyncVectorEnv`", "`SpinVectorEnv`",
+                "| one env (`gymnasium.make`), its own episode | 1 |", "one env at a time",
+                "`SyncVectorEnv`", "`SpinVectorEnv`",
                 "`BatchVectorEnv` (`vector_backend='threads'`) | 2 |", ">= 1.85"):  # fmt: skip
         assert row in text
 
