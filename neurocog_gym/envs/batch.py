@@ -83,10 +83,12 @@ class _Group:
         self._done.acquire()
 
     def stop(self) -> None:
+        if not self._thread.is_alive():  # at interpreter exit daemon threads may be gone
+            return
         self._job = None
         self._go.release()
-        self._done.acquire()
-        self._thread.join(timeout=5.0)
+        if self._done.acquire(timeout=5.0):
+            self._thread.join(timeout=5.0)
 
 
 class _IndexedError(Exception):
