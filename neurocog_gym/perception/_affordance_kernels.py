@@ -1506,3 +1506,117 @@ def view_walls_kernel(points, ground, tol, fx, fy, slope, bins, edge, cut, min_w
             out[r, 10] = run[12] - run[11]
             r += 1
     return out[:r]
+
+
+# Columns of ``map_objects_kernel``'s result.
+M_NNODES = 0
+M_NHIGH = 1
+M_HEIGHT = 2
+M_F0 = 3
+M_F1 = 4
+M_L0 = 5
+M_L1 = 6
+M_SPACING = 7
+M_VIEW = 8
+M_BOX = 9  # 9..14: min x, y, z, max x, y, z of the group's nodes
+N_MAP_COLS = 15
+
+
+@njit(cache=True, nogil=True)
+def map_objects_kernel(
+    nodes, edges, facets, fgroup, ngroups, ground, tol, fx, fy, slope, bins, edge
+):
+    """Per group of object labels, its measures on the map's nodes and facets alone.
+
+    A group's nodes are the distinct vertices of its facets (``fgroup[f]`` = group of facet
+    ``f``, -1 for facets of no group); its *high* nodes those more than ``tol`` above
+    ``ground``. The extents are the high nodes' projections along (f) and across (l) the
+    walking direction; the spacing is the median horizontal length of the graph edges that
+    join two high nodes of the group (the node spacing on the object's top, 0 without such
+    an edge); the view margin is the smallest ``edge[bin] - slope`` of its high nodes, the
+    view edge computed on the graph's own nodes (``view_edge_kernel``).
+
+    Args:
+        nodes: (n, 3) float64, metres.
+        edges: (m, 2) int64 node indices.
+        facets: (F, 3) int64 node indices.
+        fgroup: (F,) int64 group of each facet, or -1.
+        ngroups: number of groups G.
+        ground: metres, the ground level.
+        tol: metres, the ground tolerance.
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        slope: (n,) float64, each node's tan(elevation) from the sensors.
+        bins: (n,) int64, each node's azimuth bin (-1: none).
+        edge: (nbins,) float64, the largest tan(elevation) of the nodes in each bin.
+
+    Returns:
+        (G, N_MAP_COLS) float64, ``M_*`` columns (NaN extents and inf margin without a high
+        node).
+    """
+    n = nodes.shape[0]
+    out = np.zeros((ngroups, N_MAP_COLS))
+    stamp = np.full(n, -1, np.int64)
+    order = np.argsort(fgroup, kind="mergesort")
+    lens = np.empty(max(edges.shape[0], 1))
+    q = 0
+    while q < order.shape[0] and fgroup[order[q]] < 0:
+        q += 1
+    for g in range(ngroups):
+        out[g, M_HEIGHT] = -np.inf
+        out[g, M_F0] = np.inf
+        out[g, M_F1] = -np.inf
+        out[g, M_L0] = np.inf
+        out[g, M_L1] = -np.inf
+        out[g, M_VIEW] = np.inf
+        for d in range(3):
+            out[g, M_BOX + d] = np.inf
+            out[g, M_BOX + 3 + d] = -np.inf
+        # The group's facets are contiguous in ``order``; ``stamp`` marks its nodes (a node
+        # on facets of two groups counts in both).
+        while q < order.shape[0] and fgroup[order[q]] == g:
+            f = order[q]
+            q += 1
+            for c in range(3):
+                v = facets[f, c]
+                if stamp[v] == g:
+                    continue
+                stamp[v] = g
+                out[g, M_NNODES] += 1.0
+                x = nodes[v, 0]
+                y = nodes[v, 1]
+                z = nodes[v, 2]
+                for d in range(3):
+                    out[g, M_BOX + d] = min(out[g, M_BOX + d], nodes[v, d])
+                    out[g, M_BOX + 3 + d] = max(out[g, M_BOX + 3 + d], nodes[v, d])
+                if z - ground > tol:
+                    out[g, M_NHIGH] += 1.0
+                    out[g, M_HEIGHT] = max(out[g, M_HEIGHT], z - ground)
+                    pf = x * fx + y * fy
+                    pl = y * fx - x * fy
+                    out[g, M_F0] = min(out[g, M_F0], pf)
+                    out[g, M_F1] = max(out[g, M_F1], pf)
+                    out[g, M_L0] = min(out[g, M_L0], pl)
+                    out[g, M_L1] = max(out[g, M_L1], pl)
+                    b = bins[v]
+                    if b >= 0:
+                        out[g, M_VIEW] = min(out[g, M_VIEW], edge[b] - slope[v])
+        k = 0
+        for e in range(edges.shape[0]):
+            a = edges[e, 0]
+            b = edges[e, 1]
+            if stamp[a] != g or stamp[b] != g:
+                continue
+            if not (nodes[a, 2] - ground > tol and nodes[b, 2] - ground > tol):
+                continue
+            dx = nodes[a, 0] - nodes[b, 0]
+            dy = nodes[a, 1] - nodes[b, 1]
+            lens[k] = np.sqrt(dx * dx + dy * dy)
+            k += 1
+        if k > 0:
+            out[g, M_SPACING] = np.median(lens[:k])
+        if out[g, M_NHIGH] == 0.0:
+            out[g, M_HEIGHT] = np.nan
+            for c in (M_F0, M_F1, M_L0, M_L1):
+                out[g, c] = np.nan
+    return out
