@@ -115,6 +115,7 @@ class ObstacleEnv(QuadrupedEnv):
         warmup_cycles: int = 150,
         privileged: bool = False,
         outcome: OutcomeParams | None = None,
+        affordance_source: str | None = None,
         **kwargs,
     ):
         self.include_graph = bool(include_graph)
@@ -130,10 +131,17 @@ class ObstacleEnv(QuadrupedEnv):
             include_graph=include_graph, draw_overlay=draw_overlay,
             graph_max_nodes=graph_max_nodes,
             graph_max_edges=graph_max_edges, pass_margin=pass_margin,
-            warmup_cycles=warmup_cycles, outcome=outcome, privileged=privileged, **kwargs,
+            warmup_cycles=warmup_cycles, outcome=outcome, privileged=privileged,
+            affordance_source=affordance_source, **kwargs,
         )  # fmt: skip
         self.tof = ToFArray(self.model, tof or ToFParams(backend="numba"))
-        self.pipeline = AttentionPipeline(seed=0, params=_env_perception(perception, self.tof))
+        # affordance_source: "map" (sizes from the DD-GNG graph alone, the paper's) or
+        # "points" (the raw-point refinement); None keeps ``perception``'s ("points").
+        self.pipeline = AttentionPipeline(
+            seed=0,
+            params=_env_perception(perception, self.tof),
+            affordance_source=affordance_source,
+        )
         self.effectivity = Effectivity(effectivity)
         self.pool = ObstaclePool(self.model)
         self.pass_margin = float(pass_margin)
