@@ -1,7 +1,7 @@
 """Shared machinery of the perception figures and benchmarks (issues 3 and 4).
 
 Used by ``scripts/fig9_density.py``, ``attention_timing.py``, ``plot_similarity.py``,
-``plot_graph_cloud.py`` and ``bench_affordance_accuracy.py``.
+``plot_graph_cloud.py``, ``bench_affordance_accuracy.py`` and ``bench_affordance_map.py``.
 
 Two kinds of scene, both in the robot's own MuJoCo world (``assets/scene.xml``) and sensed by
 the robot's four ToF sensors (:class:`neurocog_gym.robot.tof.ToFArray`) at their frame rate:
@@ -412,6 +412,70 @@ class StaticScene:
     def close(self) -> None:
         """Release the env."""
         self.env.close()
+
+
+def draw_box(rng: np.random.Generator, scene: StaticScene) -> Block:
+    """A random box in front of the standing robot (the affordance-accuracy scenes).
+
+    4–10 cm high, 10–30 cm wide and long, any yaw, centre 0.35–0.85 m ahead and up to 0.3 m
+    aside; the same draws, in the same order, as ``scripts/bench_affordance_accuracy.py``.
+    """
+    ahead = float(rng.uniform(0.35, 0.85))
+    left = float(rng.uniform(-0.3, 0.3))
+    x, y = scene.world(ahead, left)
+    return Block(
+        x, y,
+        length=float(rng.uniform(0.10, 0.30)),
+        width=float(rng.uniform(0.10, 0.30)),
+        height=float(rng.uniform(0.04, 0.10)),
+        yaw=float(rng.uniform(0.0, math.pi)),
+    )  # fmt: skip
+
+
+def wall_behind(rng: np.random.Generator, scene: StaticScene, box: Block | None) -> Block:
+    """A 2 m × 0.5 m wall 0.3–0.55 m behind the box's far corner, facing the robot."""
+    far = 0.85
+    if box is not None:
+        rel = box.corners_xy() - scene.torso_xy
+        far = float((rel @ scene.forward[:2]).max())
+    ahead = far + float(rng.uniform(0.25, 0.5)) + 0.05
+    x, y = scene.world(ahead, 0.0)
+    return Block(x, y, length=0.10, width=2.0, height=0.5, yaw=scene.yaw)
+
+
+@dataclass(frozen=True)
+class BoxWallScene:
+    """One floor + box + wall scene: the geometry and the seeds of its run."""
+
+    box: Block
+    wall: Block
+    tof_seed: int
+    """Seed of the sensors' noise stream for the run."""
+    seed: int
+    """Seed of the pipeline's random stream."""
+
+
+def box_wall_scene(scene: StaticScene, seed: int, i: int, min_box_points: int = 30) -> BoxWallScene:
+    """Scene ``i`` of the floor + box + wall series ``seed`` (seeded by ``[seed, i]``).
+
+    Boxes are redrawn (up to 100 times) until at least ``min_box_points`` of the sensors' rays
+    hit the box; the draws are those of ``scripts/bench_affordance_accuracy.py``, so series
+    ``seed`` holds the same scenes there and in ``scripts/bench_affordance_map.py``. Leaves the
+    box and the wall placed.
+    """
+    if min_box_points < 0:
+        raise ValueError(f"min_box_points must be >= 0, got {min_box_points}")
+    rng = np.random.default_rng([seed, i])
+    box_gid = scene.pool.geoms[0]
+    for _ in range(100):
+        box = draw_box(rng, scene)
+        wall = wall_behind(rng, scene, box)
+        scene.place([box, wall])
+        scene.data.time = 0.0
+        f = scene.sensors.sense(scene.data)
+        if int((f.geom == box_gid).sum()) >= min_box_points:
+            break
+    return BoxWallScene(box, wall, int(rng.integers(2**31)), int(rng.integers(2**31)))
 
 
 # ---------------------------------------------------------------------------------------------
