@@ -1,0 +1,216 @@
+"""The "map" affordance source: sizes from the DD-GNG nodes and facets alone (issue 23).
+
+pipeline.AttentionPipeline._map_objects, _affordance_kernels.map_objects_kernel, the
+``affordance_source`` keyword (pipeline and env) and scripts/bench_affordance_map.py.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from neurocog_gym.perception import _affordance_kernels as _k
+from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
+
+ROOT = Path(__file__).resolve().parents[2]
+ORIGIN = np.array([0.0, 0.0, 0.3])
+
+
+def _top_grid():
+    """A 3 × 3 grid of nodes 5 cm apart at z = 6 cm (x 0.60–0.70, y -0.05–0.05), one floor
+    node at (0.5, 0, 0); the 8 triangles of the grid (one diagonal per cell)."""
+    xs, ys = (0.60, 0.65, 0.70), (-0.05, 0.0, 0.05)
+    nodes = [[x, y, 0.06] for x in xs for y in ys] + [[0.5, 0.0, 0.0]]
+    ids = np.arange(9).reshape(3, 3)
+    edges, facets = [], []
+    for i in range(3):
+        for j in range(3):
+            if i < 2:
+                edges.append((ids[i, j], ids[i + 1, j]))
+            if j < 2:
+                edges.append((ids[i, j], ids[i, j + 1]))
+            if i < 2 and j < 2:
+                edges.append((ids[i, j], ids[i + 1, j + 1]))
+                facets.append((ids[i, j], ids[i + 1, j], ids[i + 1, j + 1]))
+                facets.append((ids[i, j], ids[i + 1, j + 1], ids[i, j + 1]))
+    edges.append((9, ids[0, 1]))  # the floor node, not on any facet of the group
+    return (
+        np.array(nodes, dtype=np.float64),
+        np.array(edges, dtype=np.int64),
+        np.array(facets, dtype=np.int64),
+    )
+
+
+def test_map_objects_kernel_hand_computed_measures():
+    nodes, edges, facets = _top_grid()
+    slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
+    res = _k.map_objects_kernel(
+        nodes, edges, facets, np.zeros(len(facets), np.int64), 1, 0.0, 0.02, 1.0, 0.0,
+        slope, bins, edge,
+    )  # fmt: skip
+    r = res[0]
+    assert r[_k.M_NNODES] == 9 and r[_k.M_NHIGH] == 9  # the floor node is on no facet
+    assert r[_k.M_HEIGHT] == pytest.approx(0.06)
+    # along x (forward) 0.70 - 0.60, across 0.05 - (-0.05)
+    assert r[_k.M_F1] - r[_k.M_F0] == pytest.approx(0.10)
+    assert r[_k.M_L1] - r[_k.M_L0] == pytest.approx(0.10)
+    # 12 grid edges of 0.05 m and 4 diagonals of 0.0707 m: the median is 0.05
+    assert r[_k.M_SPACING] == pytest.approx(0.05)
+    np.testing.assert_allclose(r[_k.M_BOX : _k.M_BOX + 6], [0.6, -0.05, 0.06, 0.7, 0.05, 0.06])
+    # The floor node (slope (0 - 0.3) / 0.5 = -0.6) shares the central bin with the grid;
+    # the grid's nearest row (slope (0.06 - 0.3) / 0.6 = -0.4) is the highest there: margin 0.
+    assert r[_k.M_VIEW] == pytest.approx(0.0)
+
+
+def test_map_objects_kernel_without_high_nodes_gives_nan_extents():
+    nodes, edges, facets = _top_grid()
+    nodes = nodes.copy()
+    nodes[:, 2] = 0.0
+    slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
+    res = _k.map_objects_kernel(
+        nodes, edges, facets, np.zeros(len(facets), np.int64), 1, 0.0, 0.02, 1.0, 0.0,
+        slope, bins, edge,
+    )  # fmt: skip
+    assert res[0, _k.M_NNODES] == 9 and res[0, _k.M_NHIGH] == 0
+    assert math.isnan(res[0, _k.M_HEIGHT]) and math.isnan(res[0, _k.M_F0])
+    assert res[0, _k.M_SPACING] == 0.0
+
+
+def test_affordance_source_is_validated():
+    with pytest.raises(ValueError, match="affordance_source"):
+        PipelineParams(affordance_source="raw")
+    with pytest.raises(ValueError, match="affordance_source"):
+        AttentionPipeline(affordance_source="graph")
+    with pytest.raises(ValueError, match="map_edge_correction"):
+        PipelineParams(map_edge_correction=-1.0)
+    with pytest.raises(ValueError, match="map_view_bins"):
+        PipelineParams(map_view_bins=0)
+    assert PipelineParams().affordance_source == "points"  # today's behaviour by default
+    assert AttentionPipeline(affordance_source="map").params.affordance_source == "map"
+
+
+def _box_frame(rng):
+    """A floor (z = 0, x 0.2–1.4, y ±0.6) and a 20 × 20 × 7 cm box at x 0.6–0.8, y ±0.1."""
+    fl = np.column_stack(
+        [rng.uniform(0.2, 1.4, 6000), rng.uniform(-0.6, 0.6, 6000), np.zeros(6000)]
+    )
+    fl = fl[~((fl[:, 0] > 0.6) & (fl[:, 0] < 0.8) & (np.abs(fl[:, 1]) < 0.1))]
+    top = np.column_stack(
+        [rng.uniform(0.6, 0.8, 1500), rng.uniform(-0.1, 0.1, 1500), np.full(1500, 0.07)]
+    )
+    front = np.column_stack(
+        [np.full(500, 0.6), rng.uniform(-0.1, 0.1, 500), rng.uniform(0.0, 0.07, 500)]
+    )
+    return np.concatenate([fl, top, front])
+
+
+def _run(source, monkeypatch=None, cycles=300):
+    rng = np.random.default_rng(0)
+    pipe = AttentionPipeline(seed=3, affordance_source=source)
+    pts = _box_frame(rng)
+    aff = None
+    for c in range(cycles):
+        aff = pipe.step(pts, ORIGIN, 0.01 * c)
+    return pipe, aff
+
+
+def test_map_mode_reads_no_raw_points(monkeypatch):
+    def boom(*_a, **_k):
+        raise AssertionError("a raw-point kernel ran in map mode")
+
+    for name in ("refine_objects_kernel", "noise_level_kernel", "view_walls_kernel"):
+        monkeypatch.setattr(_k, name, boom)
+    pipe, aff = _run("map")
+    assert aff.obstacles, "the box is found on the map"
+    assert pipe.timings["refine"] >= 0.0
+
+
+def test_map_mode_sizes_are_the_high_nodes_extents_plus_the_spacing_correction():
+    pipe, aff = _run("map")
+    nodes, edges = pipe.net.nodes, pipe.net.edges
+    tol = pipe.affordance_params.ground_tolerance
+    c = pipe.params.map_edge_correction
+    checked = 0
+    for k, o in enumerate(aff.objects):
+        if o.kind != "object":
+            continue
+        ids = np.unique(aff.facets[aff.facet_labels == k])
+        hi = ids[nodes[ids, 2] > aff.ground_z + tol]
+        if len(hi) < 2:
+            continue
+        both = np.isin(edges[:, 0], hi) & np.isin(edges[:, 1], hi)
+        d = nodes[edges[both, 0], :2] - nodes[edges[both, 1], :2]
+        s = float(np.median(np.hypot(d[:, 0], d[:, 1]))) if both.any() else 0.0
+        # forward is +x: length along x, width along y
+        assert o.length == pytest.approx(np.ptp(nodes[hi, 0]) + c * s, abs=1e-9)
+        assert o.width == pytest.approx(np.ptp(nodes[hi, 1]) + c * s, abs=1e-9)
+        assert o.height == pytest.approx(nodes[hi, 2].max() - aff.ground_z, abs=1e-9)
+        assert o.n_nodes == len(ids)
+        assert o.density == pytest.approx(len(ids) / o.size)
+        assert o.suspected == (o.density < pipe.affordance_params.density_threshold)
+        checked += 1
+    assert checked >= 1
+    # every facet keeps a valid label after the merge
+    assert aff.facet_labels.min() >= 0 and aff.facet_labels.max() < len(aff.objects)
+    assert aff.label_kinds == tuple(o.kind for o in aff.objects)
+
+
+def test_points_mode_is_the_default_and_unchanged():
+    a_pipe, a = _run(None, cycles=120)
+    b_pipe, b = _run("points", cycles=120)
+    np.testing.assert_array_equal(a_pipe.net.nodes, b_pipe.net.nodes)
+    assert [(o.kind, o.height, o.width, o.length) for o in a.objects] == [
+        (o.kind, o.height, o.width, o.length) for o in b.objects
+    ]
+
+
+def test_map_mode_relabels_a_surface_at_the_top_of_the_graphs_view_as_wall():
+    # A strip of nodes 1.0 m ahead, 5 cm up, beyond the floor: the farthest (highest-elevation)
+    # nodes of the graph in their azimuth, so the foot of something out of sight.
+    pipe, aff = _run("map", cycles=1)
+    assert pipe.params.map_view_cut == 0.0
+    nodes, edges, facets = _top_grid()
+    nodes = nodes + np.array([0.4, 0.0, 0.0])  # x 1.0–1.1: the farthest nodes
+    slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
+    res = _k.map_objects_kernel(
+        nodes, edges, facets, np.zeros(len(facets), np.int64), 1, 0.0, 0.02, 1.0, 0.0,
+        slope, bins, edge,
+    )  # fmt: skip
+    assert res[0, _k.M_VIEW] <= pipe.params.map_view_cut
+
+
+def test_env_passes_affordance_source_through_gymnasium_make():
+    import gymnasium as gym
+
+    import neurocog_gym  # noqa: F401
+
+    env = gym.make("NeuroCog/SuddenObstacle-v1", affordance_source="map")
+    try:
+        assert env.unwrapped.pipeline.params.affordance_source == "map"
+    finally:
+        env.close()
+    env = gym.make("NeuroCog/SuddenObstacle-v1")
+    try:
+        assert env.unwrapped.pipeline.params.affordance_source == "points"
+    finally:
+        env.close()
+    with pytest.raises(ValueError, match="affordance_source"):
+        gym.make("NeuroCog/SuddenObstacle-v1", affordance_source="raw")
+
+
+@pytest.mark.slow
+def test_bench_affordance_map_runs_end_to_end(tmp_path):
+    out = tmp_path / "table.md"
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "bench_affordance_map.py"), "--scenes", "1",
+         "--pipelines", "DD-GNG, map", "GNG, map", "--out", str(out)],
+        capture_output=True, text=True, cwd=ROOT, timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    text = out.read_text()
+    assert "| DD-GNG, map |" in text and "| GNG, map |" in text and "Machine:" in text
