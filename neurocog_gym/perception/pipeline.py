@@ -54,6 +54,15 @@ re-measured offline on the benchmark's end-state frames). Two checks ride on it:
   over the frame's heights.
 
 ``timings`` has a ``"refine"`` entry for this step (0 when there is no object).
+
+Two affordance sources (``PipelineParams.affordance_source``): everything above is the
+``"points"`` source, this project's addition and the default. ``"map"`` is the paper's
+(§4.2.1): no raw point is read after the learning cycle; each object's measures come from the
+graph's nodes and facets, with three map-mode steps (:meth:`AttentionPipeline._map_objects`):
+overlapping object labels merged, width and length grown by the node spacing at the edges
+(boundary handling; the attention box grows with them, Algorithm 3's A_min/A_max), and objects
+at the top of the graph's own view relabelled wall. In "map" mode the ``"refine"`` timing is
+that of these steps. ``scripts/bench_affordance_map.py`` measures both.
 """
 
 from __future__ import annotations
