@@ -33,18 +33,18 @@ ENV_IDS: tuple[str, ...] = (
 register(
     id="NeuroCog/Walk-v1",
     entry_point="neurocog_gym.envs.walk:WalkEnv",
-    vector_entry_point="neurocog_gym.envs.vector:walk_vector",
+    vector_entry_point="neurocog_gym.envs.make_vec:walk_vector",
     max_episode_steps=2000,
 )
 register(
     id="NeuroCog/SuddenObstacle-v1",
     entry_point="neurocog_gym.envs.sudden:SuddenObstacleEnv",
-    vector_entry_point="neurocog_gym.envs.vector:sudden_obstacle_vector",
+    vector_entry_point="neurocog_gym.envs.make_vec:sudden_obstacle_vector",
     max_episode_steps=700,
 )
 register(
     id="NeuroCog/StaticObstacle-v1",
     entry_point="neurocog_gym.envs.static:StaticObstacleEnv",
-    vector_entry_point="neurocog_gym.envs.vector:static_obstacle_vector",
+    vector_entry_point="neurocog_gym.envs.make_vec:static_obstacle_vector",
     max_episode_steps=1000,
 )

@@ -60,7 +60,7 @@ def test_info_text_one_env(capsys):
     assert cli.main(["info", "--env", "NeuroCog/Walk-v1"]) == 0
     out = capsys.readouterr().out
     assert "NeuroCog/Walk-v1" in out and "2000 steps" in out and "joint_pos" in out
-    assert "make_vec(id, n): neurocog_gym.envs.vector:walk_vector" in out
+    assert "make_vec(id, n): neurocog_gym.envs.make_vec:walk_vector" in out
     assert "SuddenObstacle" not in out
 
 

@@ -177,7 +177,7 @@ def test_make_vec_default_mode_is_spin_and_agrees_with_sync():
     assert spin.action_space == sync.action_space
     _assert_same_rollouts(sync, spin, 40, 2)
     for env_id in neurocog_gym.ENV_IDS:
-        assert gym.spec(env_id).vector_entry_point.startswith("neurocog_gym.envs.vector:")
+        assert gym.spec(env_id).vector_entry_point.startswith("neurocog_gym.envs.make_vec:")
 
 
 def test_merge_infos_is_gymnasiums_add_info():
