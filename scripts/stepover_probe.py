@@ -82,6 +82,9 @@ class Args:
     shift: float = 0.0
     """Abduction interrupt of the three standing legs while the FL leg steps over (+: their feet
     move left under the body, the body right, away from the lifted leg)."""
+    shift_fl: float = 0.0
+    """Abduction interrupt of the FL leg itself while it steps over (with ``shift``: a negative
+    value keeps its foot in its lane while the body moves sideways)."""
     sag: float = 0.0
     """Walking provision s_SAG for t_lift + t_carry + t_drop from the lift-off (either primitive;
     0: unchanged, -0.5: the trot marches in place)."""
@@ -150,6 +153,7 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
             act[12] = a.sag
         if a.shift and 0.0 <= t < t_path:
             act[[3, 6, 9]] = a.shift
+            act[0] = a.shift_fl
         if a.primitive == "interrupt" and state:
             if state == 1:
                 act[1], act[2] = 0.3, 1.0
@@ -187,15 +191,24 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
                 if other in fl_geoms:
                     first = (m.geom(other).name, round(float(d.time - t_lift), 2))
     beyond = float(d.site_xpos[r.foot_site[0], 0] - far)
+    others, t_fall = set(), None
     for _ in range(60):
         env.step(np.zeros(15))
+        for i in range(d.ncon):
+            con = d.contact[i]
+            if block in (con.geom1, con.geom2):
+                other = con.geom2 if con.geom1 == block else con.geom1
+                if other in r.robot_geoms:
+                    others.add(m.geom(other).name)
+        if t_fall is None and d.xmat[r.torso_body][8] < 0.5:
+            t_fall = round(float(d.time - t_lift), 2)
     upright = bool(d.xmat[r.torso_body][8] > 0.5)
     env.close()
     # Over, not round: the whole sole stayed above the top face (its centre within the half width
     # of 10 cm less the sole radius) while the foot crossed the block.
     lateral = max((abs(v) for v in over), default=np.inf)
     return {"first_touch": first, "past_far_face_m": round(beyond, 3), "upright": upright,
-            "lateral_m": round(lateral, 3), "over": bool(lateral < 0.10 - R_FOOT)}  # fmt: skip
+            "later": sorted(others), "t_fall": t_fall, "lateral_m": round(lateral, 3), "over": bool(lateral < 0.10 - R_FOOT)}  # fmt: skip
 
 
 def _prepare_body(a: Args) -> None:
@@ -237,22 +250,24 @@ def main(argv: list[str] | None = None) -> None:
     import neurocog_gym  # noqa: F401  (registers the env ids, after the assets are chosen)
 
     print("| seed | gap, cm | height, cm | length, cm | first FL touch (s after lift-off) | "
-          "foot past far face, cm | upright | widest sideways while crossing, cm |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|---|")
+          "foot past far face, cm | upright (fell at, s) | widest sideways while crossing, cm | "
+          "touched afterwards |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|")
     clean = n = 0
     for seed in range(a.seeds):
         for gap in (0.02, 0.04, 0.06):
             for h, length in ((0.06, 0.05), (0.08, 0.08), (0.08, 0.12)):
                 res = probe(a, seed, gap, h, length)
                 touch = res["first_touch"]
-                up = "yes" if res["upright"] else "no"
+                up = "yes" if res["upright"] else f"no ({res['t_fall']})"
                 ok = touch is None and res["past_far_face_m"] > 0 and res["upright"] and res["over"]
                 clean += ok
                 n += 1
                 side = res["lateral_m"] * 100
                 print(f"| {seed} | {gap * 100:.0f} | {h * 100:.0f} | {length * 100:.0f} | "
                       f"{'-' if touch is None else f'{touch[0]} ({touch[1]:.2f})'} | "
-                      f"{res['past_far_face_m'] * 100:.1f} | {up} | {side:.1f} |")  # fmt: skip
+                      f"{res['past_far_face_m'] * 100:.1f} | {up} | {side:.1f} | "
+                      f"{', '.join(res['later']) or '-'} |")  # fmt: skip
     print(
         f"\nclean FL step-overs (no FL touch, the sole over the top face, foot past the far "
         f"face, upright): {clean} / {n}"
