@@ -1,34 +1,38 @@
 """OraclePolicy: a scripted step-over that reads the true block boxes (privileged).
 
-It shows what body v1 and its motor-neuron pools can do when perception and learning are taken
+It shows what the body and its motor-neuron pools can do when perception and learning are taken
 out: the upper-bound row of the benchmark, not the paper's controller. It needs the obstacle
 env's privileged observation keys (``gymnasium.make(id, privileged=True)``): ``true_blocks``
 (the simulator's block boxes) and ``feet`` (the soles' positions), besides the ordinary
-``touch``, ``foothold`` (the effectivity's predicted footholds) and joint angles. Nothing else of
-the env is read; the decision is the policy's.
+``touch``, ``foothold`` (the effectivity's predicted footholds) and ``cpg`` (the rhythm the
+env's CPG is in: a leg's CPG swing is its knee flexor's output above its extensor's). Nothing
+else of the env is read; the decision is the policy's.
 
-Per leg, while it swings (touch below ``touch_off``) and the other leg of its pair (FL-FR,
-HL-HR) stands, the script asks whether this swing meets a block: one in the foot's lane (its
-lateral position in the block's frame within the half-width plus ``lane_margin``) whose near
-face lies before the predicted foothold plus ``trigger`` and whose far face is still ahead of
-the sole. If it does:
+A step-over starts only where the trot gives it room: at a leg's CPG swing onset (within
+``fresh_swing`` of it), and only while the other leg of its pair (FL-FR, HL-HR) stands. Lifting
+a foot the CPG holds in stance took a support leg away while the same-side leg swung: the
+robot stood on its two right (or left) feet and fell sideways (the v2 trace of
+docs/oracle_notes.md). Per leg, the script asks whether this swing meets a block: one in the
+foot's lane (its lateral position in the block's frame within the half-width plus
+``lane_margin``) whose near face lies before the predicted foothold plus ``trigger`` and whose
+far face is still ahead of the sole. If it does:
 
-* **step over**, when the far face is at most ``max_over`` ahead of the sole: *lift* with the
-  lift interrupt (hip ``lift_hip``, knee +1: the foot rises about where it is) until the sole is
-  ``clearance`` above the top, then *carry* (hip -1, knee ``carry_knee``; the knee folds fully
-  whenever the sole sinks towards the top) until the sole is ``beyond`` past the far face, then
-  release: the CPG puts the foot down beyond the block;
-* **drop**, otherwise (the block is too far to clear, or the swing is already under way: a swing
-  carried over from mid-swing reaches only about 5 cm further while high): the swing goes on
-  until the sole is ``drop_gap`` from the near face, then hip +1, knee -1 until the foot is
-  down (measured on body v1: it lands within 0.05 s, 2 cm further on), with the walking
-  provision s_SAG = ``brake_sag`` (the trot marches in place) meanwhile, so that the next
-  swing starts just in front of the block and steps over it from its lift-off.
+* **step over**, at the swing's onset and when the far face is at most ``max_over`` ahead of
+  the sole: *lift* with the lift interrupt (hip ``lift_hip``, knee +1: the foot rises about
+  where it is) until the sole is ``clearance`` above the top, then *carry* (hip -1, knee
+  ``carry_knee``; the knee folds fully whenever the sole sinks towards the top) until the sole
+  is ``beyond`` past the far face, then release: the CPG puts the foot down beyond the block.
+  A step-over lasts longer than the CPG's swing; once the CPG has put this leg into stance, the
+  same-side leg (FL-HL, FR-HR) is *held down* while its own CPG swing would lift it (hip
+  ``hold_hip``, knee ``hold_knee``), so that the robot stands on three feet until the stepping
+  foot lands;
+* **shorten** (drop), otherwise (the block is too far to clear, or the swing is already under
+  way, as a sudden block's is): the swing goes on until the sole is ``drop_gap`` from the near
+  face, then hip +1, knee -1 until the foot is down, with the walking provision s_SAG =
+  ``brake_sag`` meanwhile, so that the next swing starts just in front of the block and steps
+  over it from its onset.
 
-The lift-and-carry numbers were measured on body v1 in the open (``docs/body.md``): the sole
-stays above 9 cm from 3 cm behind to 20 cm ahead of where the lift began. A leg is released after
-``max_hold`` seconds whatever its state (a leg held much longer than one swing loses the trot's
-diagonal support).
+A leg is released after ``max_hold`` seconds whatever its state.
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ import numpy as np
 
 from neurocog_gym.policies.base import ACTION_DIM
 
-IDLE, LIFT, CARRY, DROP, APPROACH = 0, 1, 2, 3, 4
+IDLE, LIFT, CARRY, DROP, APPROACH, LAND = 0, 1, 2, 3, 4, 5
 
 
 @dataclass(frozen=True)
@@ -65,13 +69,30 @@ class OracleParams:
     carry_knee: float = 0.5
     """Knee entry while carrying the foot over (measured on body v1: with 0.5 the sole stays
     above 9 cm over 23 cm of forward travel; 0 or -0.5 drop it within 3-10 cm; 1 stalls it)."""
+    carry_gain: float = 20.0
+    """Knee entry per metre of sole height below ``clearance`` above the top while carrying."""
     brake_sag: float = -0.5
     """s_SAG while a leg drops (-0.5: stride scale 0, the trot marches in place,
     ``generator.py``)."""
+    land_hip: float = 0.0
+    """Hip entry putting a carried foot down beyond the block (0: 1 success + 1 touch of 20 sudden
+    trials on the knee-behind candidate, 12 falls; +1, a hard retraction that pitched the body
+    forward over the landed leg: 0 of 20, 14 falls)."""
+    land_knee: float = -1.0
+    """Knee entry meanwhile (stretching the leg towards the ground)."""
+    step_sag: float = 0.0
+    """s_SAG while a leg steps over (0: the trot goes on; -0.5: it marches in place)."""
     drop_gap: float = 0.04
     """A foot that cannot step over drops once its sole is this close to the near face, m."""
     fresh_swing: float = 0.03
-    """A step-over starts only this soon after the lift-off, s (later, the foot drops)."""
+    """A step-over starts only this soon after the leg's CPG swing onset, s (later, the foot
+    drops)."""
+    hold_hip: float = 0.3
+    """Hip entry holding the same-side leg down while a step-over outlasts the CPG swing
+    (``scripts/stepover_probe.py --hold_hip 0.5 --hold_knee -1``: 5 of 9 clean FL step-overs
+    against 0 of 9 with the knee alone, which fell every time)."""
+    hold_knee: float = -0.5
+    """Knee entry of that hold (the leg stretched: the foot stays down)."""
     max_hold: float = 0.45
     """Longest a leg is held in lift or carry, s."""
     dt: float = 0.01
@@ -98,6 +119,7 @@ class OraclePolicy:
         self.held = np.zeros(4)
         self.block = np.full(4, -1, dtype=np.int64)
         self.air = np.zeros(4)
+        self.swing_t = np.full(4, np.inf)
 
     def __call__(self, obs) -> np.ndarray:
         """The action for one observation of an obstacle env made with ``privileged=True``."""
@@ -111,6 +133,12 @@ class OraclePolicy:
         feet = np.asarray(obs["feet"], dtype=np.float64).reshape(4, 3)
         footholds = np.asarray(obs["foothold"], dtype=np.float64).reshape(4, 3)
         touch = np.asarray(obs["touch"], dtype=np.float64)
+        y = np.asarray(obs["cpg"], dtype=np.float64).reshape(4, 6)
+        # A leg's CPG swing: its knee flexor above its extensor (the foot rises; the hip flexor
+        # takes over about 0.06 s later, generator.swinging).
+        cpg_swing = y[:, 2] > y[:, 3]
+        self.swing_t = np.where(cpg_swing, self.swing_t + p.dt, np.inf)
+        self.swing_t[cpg_swing & ~np.isfinite(self.swing_t)] = 0.0
         action = np.zeros(ACTION_DIM, dtype=np.float32)
         for leg in range(4):
             sole = feet[leg, 2] - p.foot_radius
@@ -133,6 +161,8 @@ class OraclePolicy:
                     if st == LIFT and sole > b[6] + p.clearance:
                         st = CARRY
                     if st == CARRY and lx - p.foot_radius > b[4] + p.beyond:
+                        st = LAND
+                    if st == LAND and down:
                         st = IDLE
             partner = leg ^ 1  # FL <-> FR, HL <-> HR: never both legs of a pair in the air
             partner_down = touch[partner] >= p.touch_off and self.state[partner] in (
@@ -140,10 +170,10 @@ class OraclePolicy:
                 DROP,
                 APPROACH,
             )
-            if st == IDLE and not down and partner_down:
+            if st == IDLE and cpg_swing[leg] and partner_down:
                 k, far = self._block_met(feet[leg, :2], footholds[leg, :2], blocks)
                 if k >= 0:
-                    fresh = self.air[leg] <= p.fresh_swing
+                    fresh = self.swing_t[leg] <= p.fresh_swing
                     st = LIFT if far <= p.max_over and fresh else APPROACH
                     self.block[leg], self.held[leg] = k, 0.0
             if st == IDLE:
@@ -154,15 +184,30 @@ class OraclePolicy:
             if st == DROP:
                 action[j + 1] = 1.0
                 action[j + 2] = -1.0
+            elif st == LAND:
+                action[j + 1] = p.land_hip
+                action[j + 2] = p.land_knee
             if st == LIFT:
                 action[j + 1] = p.lift_hip
                 action[j + 2] = 1.0
             elif st == CARRY:
-                top = blocks[self.block[leg], 6]
+                # Hold the sole near ``clearance`` above the top: a foot carried higher than
+                # needed takes longer to come down on the far side.
+                err = blocks[self.block[leg], 6] + p.clearance - sole
                 action[j + 1] = -1.0
-                action[j + 2] = 1.0 if sole < top + 0.5 * p.clearance else p.carry_knee
+                action[j + 2] = float(np.clip(p.carry_knee + p.carry_gain * err, -1.0, 1.0))
+        stepping = np.isin(self.state, (LIFT, CARRY, LAND))
+        if (stepping & ~cpg_swing).any():
+            # A step-over past the CPG's swing: every other leg the CPG would lift is held down,
+            # so the robot stands on three feet until the stepping foot lands.
+            for other in range(4):
+                if self.state[other] == IDLE and cpg_swing[other]:
+                    action[3 * other + 1] = p.hold_hip
+                    action[3 * other + 2] = p.hold_knee
         if (self.state == DROP).any():
             action[12] = p.brake_sag
+        elif stepping.any() and p.step_sag:
+            action[12] = p.step_sag
         return action
 
     def _block_met(

@@ -22,8 +22,15 @@ def test_oracle_refuses_an_observation_without_the_privileged_keys():
     env.close()
 
 
-def test_a_swing_that_meets_a_block_from_its_lift_off_lifts_that_foot():
-    policy = OraclePolicy()
+def _cpg(swinging):
+    """A ``cpg`` observation whose knee flexor dominates on the legs in ``swinging``."""
+    y = np.zeros((4, 6), np.float32)
+    for leg in range(4):
+        y[leg, 2 if leg in swinging else 3] = 1.0
+    return y.ravel()
+
+
+def _staged_block_ahead_of_fl():
     # One block 10 cm long, its near face 4 cm ahead of the FL sole, top 7 cm; the FL foot has
     # just lifted (touch 0), its pair partner FR stands; the predicted foothold lies on the block.
     blocks = np.zeros((4, 7), np.float32)
@@ -32,17 +39,49 @@ def test_a_swing_that_meets_a_block_from_its_lift_off_lifts_that_foot():
                      [-0.2, -0.12, 0.018]], np.float32)  # fmt: skip
     foothold = feet.copy()
     foothold[0, 0] = 0.33
-    obs = {"true_blocks": blocks.ravel(), "feet": feet.ravel(), "foothold": foothold.ravel(),
-           "touch": np.array([0.0, 1.0, 1.0, 0.0], np.float32)}  # fmt: skip
+    return {"true_blocks": blocks.ravel(), "feet": feet.ravel(), "foothold": foothold.ravel(),
+            "touch": np.array([0.0, 1.0, 1.0, 0.0], np.float32), "cpg": _cpg({0, 3})}  # fmt: skip
+
+
+def test_a_swing_that_meets_a_block_from_its_cpg_swing_onset_lifts_that_foot():
+    policy = OraclePolicy()
+    obs = _staged_block_ahead_of_fl()
     a = policy(obs)
     assert policy.state[0] == 1  # LIFT
     assert a[2] == 1.0 and a[1] == pytest.approx(policy.p.lift_hip)  # knee folds, hip back a bit
     assert np.all(a[3:] == 0.0)
-    # The same swing 0.1 s later (not fresh): it cannot be carried over, so it approaches.
+    # The same swing 0.1 s after its CPG onset (not fresh): it cannot be carried over, so it
+    # approaches (and drops before the near face).
     policy.reset()
-    policy.air[0] = 0.1
+    policy.swing_t[0] = 0.1
     a = policy(obs)
     assert policy.state[0] == 4  # APPROACH: no interrupt until the sole is near the face
+
+
+def test_a_foot_the_cpg_holds_in_stance_is_never_lifted():
+    # The same block and foot, but the CPG has FL in stance (the foot only lost its load):
+    # lifting it would take a support leg away (docs/oracle_notes.md), so nothing acts.
+    policy = OraclePolicy()
+    obs = _staged_block_ahead_of_fl()
+    obs["cpg"] = _cpg({1, 2})
+    a = policy(obs)
+    assert policy.state[0] == 0 and np.all(a == 0.0)
+
+
+def test_a_step_over_past_the_cpg_swing_holds_the_legs_the_cpg_would_lift():
+    policy = OraclePolicy()
+    obs = _staged_block_ahead_of_fl()
+    policy(obs)
+    assert policy.state[0] == 1
+    # The CPG moves on: FL and HR to stance, FR and HL to swing, while FL is still lifting.
+    obs["cpg"] = _cpg({1, 2})
+    a = policy(obs)
+    assert policy.state[0] == 1
+    p = policy.p
+    for leg in (1, 2):  # FR and HL: held down
+        assert a[3 * leg + 1] == pytest.approx(p.hold_hip)
+        assert a[3 * leg + 2] == pytest.approx(p.hold_knee)
+    assert np.all(a[9:12] == 0.0)  # HR: the CPG keeps it in stance anyway
 
 
 def test_true_blocks_observation_gives_the_placed_blocks():
