@@ -85,6 +85,14 @@ class Args:
     shift_fl: float = 0.0
     """Abduction interrupt of the FL leg itself while it steps over (with ``shift``: a negative
     value keeps its foot in its lane while the body moves sideways)."""
+    hold_knee: float = 0.0
+    """Knee interrupt of the HL leg (FL's same-side partner) while FL is held up past its nominal
+    swing (0: none; negative stretches it: the HL foot stays down, so the robot stands on FR, HL
+    and HR instead of only the right legs)."""
+    hold_hip: float = 0.0
+    """Hip interrupt of the HL leg meanwhile (with ``hold_knee``)."""
+    hold_from: float = 0.15
+    """Seconds after FL's lift-off from which the HL hold applies."""
     sag: float = 0.0
     """Walking provision s_SAG for t_lift + t_carry + t_drop from the lift-off (either primitive;
     0: unchanged, -0.5: the trot marches in place)."""
@@ -142,7 +150,7 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
     fl_geoms = {int(g) for g in r.robot_geoms if m.geom(int(g)).name.startswith("FL")}
     z_apex, x_land = height + R_FOOT + a.apex, far + R_FOOT + a.land
     t_path = a.t_lift + a.t_carry + a.t_drop
-    state, first = 1, None
+    state, first, t_fall = 1, None, None
     over = []  # FL foot's lateral offset from the block's centre line while above the block
     for _ in range(90):
         t = d.time - t_lift
@@ -154,6 +162,8 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
         if a.shift and 0.0 <= t < t_path:
             act[[3, 6, 9]] = a.shift
             act[0] = a.shift_fl
+        if (a.hold_knee or a.hold_hip) and t >= a.hold_from and (state or t < t_path):
+            act[7], act[8] = a.hold_hip, a.hold_knee
         if a.primitive == "interrupt" and state:
             if state == 1:
                 act[1], act[2] = 0.3, 1.0
@@ -190,8 +200,10 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
                 other = con.geom2 if con.geom1 == block else con.geom1
                 if other in fl_geoms:
                     first = (m.geom(other).name, round(float(d.time - t_lift), 2))
+        if t_fall is None and d.xmat[r.torso_body][8] < 0.5:
+            t_fall = round(float(d.time - t_lift), 2)
     beyond = float(d.site_xpos[r.foot_site[0], 0] - far)
-    others, t_fall = set(), None
+    others = set()
     for _ in range(60):
         env.step(np.zeros(15))
         for i in range(d.ncon):
