@@ -266,8 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run seed (trial seeds derive from seed, scenario, i)")  # fmt: skip
     p.add_argument("--policy", default="aef",
                    help="aef, aef-provision (interrupts off), blind, oracle (privileged "
-                        "step-over script), avoid (back-off and "
-                        "side-step reflex + aef-provision), ppo (the shipped PPO policy: "
+                        "step-over script), ppo (the shipped PPO policy: "
                         "trained on v0, refused until retrained on v1), AEF weights (.npz) or "
                         "a stable-baselines3 model (.zip)")  # fmt: skip
     p.add_argument("--attention", choices=("on", "off"), default="on",
@@ -294,7 +293,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--env", default="NeuroCog/SuddenObstacle-v1",
                    help="registered env id (see neurocog info)")  # fmt: skip
     p.add_argument("--policy", default="aef",
-                   help="aef, aef-provision (interrupts off), blind, avoid, ppo (the shipped "
+                   help="aef, aef-provision (interrupts off), blind, ppo (the shipped "
                         "PPO policy: trained on v0, refused until retrained on v1), AEF "
                         "weights (.npz) or a stable-baselines3 model (.zip); "
                         "Walk-v1 takes blind or a model trained on it")  # fmt: skip

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 
-_OBSTACLE_KEYS = ("aef_mode", "aef_input")
 _CONTROL_DT = 0.01  # s, every registered env's control cycle (SPEC §9); sets the time limit
 
 
@@ -27,9 +26,10 @@ def _check_policy(policy, spec: str, env) -> None:
     from neurocog_gym.policies import AEFPolicy
 
     space = env.observation_space
-    if isinstance(policy, AEFPolicy) and not all(k in space.spaces for k in _OBSTACLE_KEYS):
+    missing = [k for k in AEFPolicy.obs_keys if k not in space.spaces]
+    if isinstance(policy, AEFPolicy) and missing:
         raise ValueError(
-            f"policy {spec!r} reads the obstacle envs' aef_mode/aef_input, which "
+            f"policy {spec!r} reads the obstacle envs' {', '.join(missing)}, which "
             f"{env.spec.id} does not observe; use --policy blind for it"
         )
     model = getattr(policy, "model", None)

@@ -2,8 +2,9 @@
 
 Runs the same ``NeuroCog/SuddenObstacle-v1`` trial (same seed, so the same block appears at the
 same moment) once per policy and plots the height of each front foot's sole over time, with the
-obstacle's appearance and height marked, the AEF's interrupt cycles and the effectivity's
-stop / side-step / pass states (``locomotion/avoidance.py``) shaded, and, on the right axis, the
+obstacle's appearance and height marked, the effectivity's interrupt phases and the AEF fit's
+stop / side-step / pass states (``locomotion/avoidance.py``, run by the policy) shaded, and, on
+the right axis, the
 leading foot's distance to the block's near face (the stop shows there, not in the foot heights:
 the AEF does not step over a block that appears within reach).
 
@@ -39,7 +40,8 @@ def record(policy_name: str, seed: int) -> dict:
         t.append(float(u.data.time))
         z.append(u._feet()[:, 2] - radius)
         phase.append(u.eff.phase.copy() if u.eff.phase is not None else np.zeros(4, int))
-        state.append(u.effectivity.avoidance.state)
+        fit = getattr(policy, "fit", None)  # the AEF's fit: the state its last action came from
+        state.append(fit.avoidance.state if fit is not None else 0)
         lead.append(float(u._feet()[:, 0].max()))
     outcome = info["outcome"] if info.get("passed") else "fail"
     outcome += "".join(f", {k}" for k in ("knocked", "stood_on", "fell") if info.get(k))

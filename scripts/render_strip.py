@@ -1,8 +1,8 @@
-"""A picture strip of the AEF (or the avoid reflex, or the shipped PPO policy) on a sudden block.
+"""A picture strip of the AEF (or the shipped PPO policy) on a sudden block.
 
-One seeded ``NeuroCog/SuddenObstacle-v1`` episode under ``--policy aef`` (the AEF network on the
-observation; its stop / side-step / pass comes from the effectivity's provision teacher,
-``locomotion/avoidance.py``) or ``--policy avoid`` (the interrupt-driven reflex), rendered with
+One seeded ``NeuroCog/SuddenObstacle-v1`` episode under ``--policy aef`` (the fit and the AEF
+network on the observation; its stop / side-step / pass comes from the fit's provision teacher,
+``locomotion/avoidance.py``), rendered with
 the attention graph, facets and footholds drawn in; four frames side by side: trotting just
 before the block appears, the back-off under way, the first frame of the side step's end
 ("pass"), and the robot walking past near the end of the episode.
@@ -32,7 +32,7 @@ from neurocog_gym.policies import make_policy, start_episode  # noqa: E402
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--policy", default="aef", choices=("aef", "avoid", "ppo", "blind", "oracle"),
+    ap.add_argument("--policy", default="aef", choices=("aef", "ppo", "blind", "oracle"),
                     help="controller (blind and oracle: four frames evenly spaced from the "
                          "block's appearance to 1.2 s later)")  # fmt: skip
     ap.add_argument("--seed", type=int, default=1, help="episode seed")
@@ -55,11 +55,8 @@ def main(argv: list[str] | None = None) -> None:
     u = env.unwrapped
 
     def state() -> str:
-        if args.policy == "avoid":
-            return policy.state
-        if args.policy in ("blind", "oracle"):
-            return ""
-        return u.effectivity.avoidance.state_name
+        fit = getattr(policy, "fit", None)  # the AEF's: its stop / side-step / pass teacher
+        return fit.avoidance.state_name if fit is not None else ""
 
     frames, states, times, appeared = [], [], [], None
     done = False

@@ -320,8 +320,10 @@ def _demonstrations(venv, steps: int, gamma: float, progress: bool):
 
     from neurocog_gym.policies import AEFPolicy
 
-    aef = AEFPolicy()
     n = venv.num_envs
+    # One AEF per env: it keeps per-episode state (its fit), reset when the env's episode ends
+    # (the VecEnv has reset that env by the time it hands back the next observation).
+    aefs = [AEFPolicy() for _ in range(n)]
     raw_of = getattr(venv, "get_original_obs", None)
     obs = venv.reset()
     rows = -(-steps // n)
@@ -331,7 +333,7 @@ def _demonstrations(venv, steps: int, gamma: float, progress: bool):
     counts = {"success": 0, "touch": 0, "fail": 0}
     for _ in tqdm(range(rows), desc="AEF demonstrations", unit="step", disable=not progress):
         raw = raw_of() if raw_of is not None else obs
-        act = np.stack([aef({k: raw[k][i] for k in keys}) for i in range(n)])
+        act = np.stack([aefs[i]({k: raw[k][i] for k in keys}) for i in range(n)])
         for k in keys:
             rec_obs[k].append(np.array(raw[k], copy=True))
         obs, rew, done, infos = venv.step(act)
@@ -340,7 +342,9 @@ def _demonstrations(venv, steps: int, gamma: float, progress: bool):
         rec_act.append(act)
         rec_rew.append(np.asarray(rew, np.float64))
         rec_done.append(np.asarray(done, bool))
-        for info, d in zip(infos, done, strict=True):
+        for i, (info, d) in enumerate(zip(infos, done, strict=True)):
+            if d:
+                aefs[i].reset()
             if d and "outcome" in info:
                 counts["fail" if not info.get("passed") else info["outcome"]] += 1
     rew, done = np.array(rec_rew), np.array(rec_done)  # (T, n)

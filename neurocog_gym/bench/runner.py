@@ -88,7 +88,7 @@ class BenchConfig:
     seed: int = 0
     """Run seed S; trial seeds derive from (S, scenario, index)."""
     policy: str = "aef"
-    """"aef", "aef-provision", "blind", "avoid", "ppo" (the shipped PPO policy), AEF weights
+    """"aef", "aef-provision", "blind", "oracle", "ppo" (the shipped PPO policy), AEF weights
     (.npz) or a saved stable-baselines3 model."""
     attention: str = "on"
     """"on": DD-GNG attention; "off": plain GNG (the ablation)."""
@@ -323,9 +323,11 @@ def run_trial(
         appearance to the cycle the env first saw the pass, static: from t = 0; None if not
         passed), ``contacts`` (``steps`` in
         contact, ``first_at`` s, ``events``), ``distance`` (m along x), ``steps``,
-        ``aef_mode_steps`` (cycles in mode 0/1/2), ``perception_ms`` (``mean``, ``max``,
-        ``gng_mean``, ``affordance_mean`` per control cycle), ``wall_s`` and ``similarity``
-        (:meth:`SimilarityProbe.result`). The caller adds the run's policy and attention.
+        ``aef_mode_steps`` (cycles whose action the AEF policy's fit chose in mode 0 none,
+        1 interrupt, 2 provision; None for a policy without a ``mode``), ``perception_ms``
+        (``mean``, ``max``, ``gng_mean``, ``affordance_mean`` per control cycle), ``wall_s``
+        and ``similarity`` (:meth:`SimilarityProbe.result`). The caller adds the run's policy
+        and attention.
     """
     from neurocog_gym.policies import start_episode
 
@@ -337,11 +339,14 @@ def run_trial(
     x0 = float(u.data.qpos[0])
     probe = None
     perception, gng_ms, aff_ms = [], [], []
-    modes = [0, 0, 0]
+    modes = [0, 0, 0] if hasattr(policy, "mode") else None
     contact_steps, first_touch = 0, None
     steps, terminated, truncated = 0, False, False
     while not (terminated or truncated):
-        obs, _, terminated, truncated, info = env.step(policy(obs))
+        action = policy(obs)
+        if modes is not None:
+            modes[int(policy.mode)] += 1
+        obs, _, terminated, truncated, info = env.step(action)
         steps += 1
         if info.get("sim_unstable"):
             break
@@ -350,7 +355,6 @@ def run_trial(
         perception.append(1e3 * float(timings["total"]))
         gng_ms.append(1e3 * float(timings.get("gng", math.nan)))
         aff_ms.append(1e3 * float(timings.get("affordance", math.nan)))
-        modes[int(info.get("aef_mode", 0))] += 1
         if u.pool.blocks and u.pool.touching(u.data, u.robot.robot_geoms).any():
             contact_steps += 1
             if first_touch is None:

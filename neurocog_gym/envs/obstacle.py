@@ -70,6 +70,10 @@ OBJECT_FIELDS = ("dx", "dy", "dz", "height", "width", "length", "gamma", "densit
 AEF_INPUTS = 31
 TRUE_BLOCK_SLOTS = 4
 """Blocks in the privileged ``true_blocks`` observation (``privileged=True``)."""
+BLOCK_FIELDS = ("valid", "x", "y", "yaw", "half_length", "half_width", "top")
+"""One row of ``remembered_blocks`` and ``true_blocks``."""
+MEMORY_SLOTS = 8
+"""Remembered boxes in the ``remembered_blocks`` observation (the nearest, if there are more)."""
 
 
 @dataclass(frozen=True)
@@ -170,14 +174,19 @@ class ObstacleEnv(QuadrupedEnv):
         # tables are flattened row by row; ``obs[k].reshape(N_OBJECTS, len(OBJECT_FIELDS))``.
         s["objects"] = spaces.Box(-np.inf, np.inf, (N_OBJECTS * len(OBJECT_FIELDS),), f32)
         s["objects_mask"] = spaces.Box(0.0, 1.0, (N_OBJECTS,), f32)
+        nb = len(BLOCK_FIELDS)
         s["aef_input"] = spaces.Box(-np.inf, np.inf, (AEF_INPUTS,), f32)
-        s["aef_mode"] = spaces.Discrete(3)
+        s["interrupt_direction"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
         s["foothold"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
         s["foothold_safe"] = spaces.MultiBinary(4)
+        s["path_meets_block"] = spaces.Box(0.0, 1.0, (4,), f32)
+        s["block_met"] = spaces.Box(-1.0, MEMORY_SLOTS - 1, (4,), f32)
+        s["remembered_blocks"] = spaces.Box(-np.inf, np.inf, (MEMORY_SLOTS * nb,), f32)
+        s["feet"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
+        s["leg_joints"] = spaces.Box(-np.inf, np.inf, (4 * 3 * 3,), f32)
         if self.privileged:
             # The simulator's truth, for the privileged oracle only (``privileged=True``).
-            s["true_blocks"] = spaces.Box(-np.inf, np.inf, (TRUE_BLOCK_SLOTS * 7,), f32)
-            s["feet"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
+            s["true_blocks"] = spaces.Box(-np.inf, np.inf, (TRUE_BLOCK_SLOTS * nb,), f32)
         if self.include_graph:
             s["graph_nodes"] = spaces.Box(-np.inf, np.inf, (self.graph_max_nodes * 3,), f32)
             s["graph_edges"] = spaces.Box(
@@ -245,11 +254,9 @@ class ObstacleEnv(QuadrupedEnv):
         self._yaw_now = self._yaw() if yaw is None else yaw
         self._touch_now = self.touch() if touch is None else touch
         # Fancy indexing already copies feet and hips; the kernel only reads v_body.
-        r = self.robot
         self.eff = self.effectivity.step(
-            d.time, self._touch_now, self._feet(), d.xpos[r.hip_body],
+            d.time, self._touch_now, self._feet(), d.xpos[self.robot.hip_body],
             self._yaw_now, d.qvel[0:3], self.perceived_boxes(),
-            d.xpos[r.thigh_body], d.xpos[r.shank_body],
         )  # fmt: skip
 
     # -- episode --------------------------------------------------------------------------------
@@ -452,7 +459,6 @@ class ObstacleEnv(QuadrupedEnv):
             "provision_cycles": self.provision_cycles,
             "time_to_pass_from_appear": from_appear,
             "obstacles": blocks,
-            "aef_mode": int(self.eff.mode) if self.eff is not None else 0,
         }
 
     # -- observation ----------------------------------------------------------------------------
@@ -491,42 +497,88 @@ class ObstacleEnv(QuadrupedEnv):
         rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
         objects, mask, (a_h, a_w, a_s) = self._objects(rot)
         eff = self.eff
-        torso = self.data.xpos[self.robot.torso_body]
+        d, r = self.data, self.robot
+        torso = d.xpos[r.torso_body]
         if eff is None:
             direction = np.zeros((4, 3))
-            foothold = np.zeros((4, 3))
-            safe = np.ones(4, np.int8)
-            mode = 0
+            foothold = self._feet().copy()
+            foothold_safe = np.ones(4, np.int8)
+            meets = np.zeros(4, np.float32)
+            hit = np.full(4, -1, np.int64)
         else:
             direction = eff.direction
-            foothold = (eff.foothold - torso) @ rot.T
-            safe = (eff.foothold_safe & eff.path_safe).astype(np.int8)
-            mode = int(eff.mode)
+            foothold = eff.foothold
+            foothold_safe = eff.foothold_safe.astype(np.int8)
+            meets = (~eff.path_safe).astype(np.float32)
+            hit = eff.hit
+        blocks, slot_of = self._remembered_blocks(rot, torso, yaw)
+        met = np.where(hit >= 0, slot_of[np.maximum(hit, 0)], -1).astype(np.float32)
         # Fig. 7's 31 inputs: the object's size, the interrupt directions, joint angles, touch.
         aef = np.empty(AEF_INPUTS, np.float32)
         aef[0:3] = (a_h, a_w, a_s)
         aef[3:15] = direction.ravel()
         aef[15:27] = obs["joint_pos"]
         aef[27:31] = obs["touch"]
+        joints = np.stack([d.xpos[r.hip_body], d.xpos[r.thigh_body], d.xpos[r.shank_body]], 1)
         obs.update(
             objects=objects.ravel(),
             objects_mask=mask,
             aef_input=aef,
-            aef_mode=mode,
-            foothold=foothold.astype(np.float32).ravel(),
-            foothold_safe=safe,
+            interrupt_direction=direction.astype(np.float32).ravel(),
+            foothold=_heading_frame(foothold, rot, torso).ravel(),
+            foothold_safe=foothold_safe,
+            path_meets_block=meets,
+            block_met=met,
+            remembered_blocks=blocks.ravel(),
+            feet=_heading_frame(self._feet(), rot, torso).ravel(),
+            leg_joints=_heading_frame(joints.reshape(12, 3), rot, torso).ravel(),
         )
         if self.privileged:
             obs["true_blocks"] = self._true_blocks(rot, torso)
-            feet = (self._feet() - torso) @ rot.T
-            feet[:, 2] = self._feet()[:, 2]
-            obs["feet"] = feet.astype(np.float32).ravel()
         if self.include_graph:
             g = self.pipeline.net.padded(self.graph_max_nodes, self.graph_max_edges)
             obs["graph_nodes"] = g.nodes.astype(np.float32).ravel()
             obs["graph_edges"] = g.edges.astype(np.int64).ravel()
             obs["graph_counts"] = np.array([g.n_nodes, g.n_edges], np.int64)
         return obs
+
+    def _remembered_blocks(
+        self, rot: np.ndarray, torso: np.ndarray, yaw: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The effectivity's remembered boxes as ``remembered_blocks`` rows, and their slots.
+
+        Returns:
+            (MEMORY_SLOTS, 7) float32 rows (``BLOCK_FIELDS``: valid, centre x, y from the torso
+            in its yaw frame, the yaw of the box side nearest the heading relative to it (within
+            ±45°), the half length along that side, the half width, the top above the floor; a
+            remembered box is axis-aligned in the world) and (K,) int64: the slot of each memory
+            box, -1 for one left out (more boxes than slots: the nearest are kept, in memory
+            order).
+        """
+        memory = self.effectivity.memory
+        k = len(memory)
+        out = np.zeros((MEMORY_SLOTS, len(BLOCK_FIELDS)), np.float32)
+        slot_of = np.full(max(k, 1), -1, np.int64)
+        if k == 0:
+            return out, slot_of
+        centre = 0.5 * (memory[:, 0] + memory[:, 1])
+        keep = np.arange(k)
+        if k > MEMORY_SLOTS:
+            dist = np.hypot(centre[:, 0] - torso[0], centre[:, 1] - torso[1])
+            keep = np.sort(np.argsort(dist, kind="stable")[:MEMORY_SLOTS])
+        # The world axis (of +x, +y, -x, -y) nearest the heading is the boxes' length axis.
+        quarter = int(np.round(yaw / (0.5 * np.pi)))
+        axis = 0.5 * np.pi * quarter
+        rel_yaw = (axis - yaw + np.pi) % (2 * np.pi) - np.pi
+        along_x = quarter % 2 == 0
+        for slot, m in enumerate(keep):
+            lo, hi = memory[m, 0], memory[m, 1]
+            half = 0.5 * (hi[:2] - lo[:2])
+            hl, hw = (half[0], half[1]) if along_x else (half[1], half[0])
+            rel = rot @ (centre[m] - torso)
+            out[slot] = (1.0, rel[0], rel[1], rel_yaw, hl, hw, hi[2])
+            slot_of[m] = slot
+        return out, slot_of
 
     def _true_blocks(self, rot: np.ndarray, torso: np.ndarray) -> np.ndarray:
         """(TRUE_BLOCK_SLOTS * 7,) the placed blocks' true current boxes (privileged).
@@ -536,7 +588,7 @@ class ObstacleEnv(QuadrupedEnv):
         height of its top above the floor (m). Read from MuJoCo's geom poses, so a pushed block
         is where it is now.
         """
-        out = np.zeros((TRUE_BLOCK_SLOTS, 7), np.float32)
+        out = np.zeros((TRUE_BLOCK_SLOTS, len(BLOCK_FIELDS)), np.float32)
         d, m = self.data, self.model
         heading = np.arctan2(rot[0, 1], rot[0, 0])
         for k, g in enumerate(self.pool.geom_ids[: min(len(self.pool.blocks), TRUE_BLOCK_SLOTS)]):
@@ -570,6 +622,13 @@ class ObstacleEnv(QuadrupedEnv):
             for marker in overlay_markers(self):
                 viewer.add_marker(**marker)
         return super().render()
+
+
+def _heading_frame(points: np.ndarray, rot: np.ndarray, torso: np.ndarray) -> np.ndarray:
+    """(N, 3) world points as float32: x, y from ``torso`` in the yaw frame ``rot``, z as is."""
+    out = (points - torso) @ rot.T
+    out[:, 2] = points[:, 2]
+    return out.astype(np.float32)
 
 
 def _env_perception(params: PipelineParams | None, tof: ToFArray) -> PipelineParams:

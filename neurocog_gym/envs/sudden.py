@@ -41,23 +41,34 @@ class SuddenObstacleEnv(ObstacleEnv):
     one), in the area of its predicted foothold (a nominal swing from now if the effectivity
     sees no swing), and ``info["appear_forced"]`` is True. A lift-off whose ``appear_delay`` is
     running when the deadline comes is waited for. The CPG's trot lifts a front foot every
-    ~0.23 s, so the default 1 s never fires under the blind, AEF or avoid controllers.
+    ~0.23 s, so the default 1 s never fired under the blind, AEF or (v0) avoid controllers.
 
     ## Action space, observation space
 
     As ``NeuroCog/Walk-v1`` (15-value AEF output layer), plus these observation keys. Every
     key is 1-D (tables are flattened row by row; ``reshape`` gives them back), so
     stable-baselines3's ``check_env`` is silent and its ``MultiInputPolicy`` takes them as they
-    are:
+    are. They are what the perception and the effectivity compute (§4.2.3), never a decision:
+    which output group acts is the policy's choice (``policies.AEFPolicy`` runs the fit,
+    ``locomotion/fit.py``, on these keys). Walk's ``cpg`` and ``servo_target`` are plant state,
+    not controller state: the action enters the motor-neuron pools and the CPG's drive where the
+    AEF's outputs enter them, so the CPG's rhythm and the pools' targets are the state of the
+    system the agent drives, like the joint angles. "Heading frame": x, y from the torso in its
+    yaw frame (x ahead, y left), z above the floor, m.
 
     | key | shape | meaning |
     |---|---|---|
     | objects | (32,) | the 4 nearest perceived objects ahead, 8 values each (``reshape(4, 8)``): offset from the torso in its yaw frame (3), height, width, length, gamma, density |
     | objects_mask | (4,) | 1 for a valid row |
-    | aef_input | (31,) | the AEF's inputs (Fig. 7): A_h, A_w, A_s, 4 x 3 interrupt directions (in mode 2 each leg's slot holds the effectivity's provision s_SAG, s_COR, s_DIR), 12 joint angles, 4 touch |
-    | aef_mode | () | 0 nothing to do, 1 a swing must change (interrupt group), 2 change the walk (provision group): walk round an obstacle ahead, or stop, side-step and pass a block that appeared within reach |
-    | foothold | (12,) | predicted footholds relative to the torso, yaw frame, m: x, y, z of each leg (``reshape(4, 3)``) |
-    | foothold_safe | (4,) | 1 if that foothold and swing path are clear of perceived obstacles |
+    | aef_input | (31,) | the AEF's inputs (Fig. 7): A_h, A_w, A_s, the 4 x 3 interrupt directions (as ``interrupt_direction``), 12 joint angles, 4 touch |
+    | interrupt_direction | (12,) | each leg's interrupt direction v^l (``reshape(4, 3)``): the foot velocity relative to the torso in its yaw frame, m/s, that carries the swing up and over the block it meets; 0 for a leg without one |
+    | foothold | (12,) | each leg's predicted foothold in the heading frame (``reshape(4, 3)``; a stance leg's is where it stands) |
+    | foothold_safe | (4,) | 1 if that foothold lies outside every remembered block grown by the margin |
+    | path_meets_block | (4,) | 1 if the leg swings and its predicted swing path enters a remembered block grown by the margin |
+    | block_met | (4,) | the ``remembered_blocks`` row of the block the leg's foothold lies in (first) or its swing path meets, -1 none |
+    | remembered_blocks | (56,) | the effectivity's obstacle memory (``reshape(8, 7)``): valid, centre x, y in the heading frame, yaw of the box side nearest the heading (within ±45°), half length along it, half width, top above the floor; kept until the feet are past, also out of the sensors' view (under the body); the nearest 8 |
+    | feet | (12,) | soles in the heading frame (``reshape(4, 3)``) |
+    | leg_joints | (36,) | each leg's abduction, hip and knee joint in the heading frame (``reshape(4, 3, 3)``) |
     | graph_nodes | (3 graph_max_nodes,) | the DD-GNG graph's node positions, padded with 0 (``reshape(-1, 3)``; ``include_graph=True`` only) |
     | graph_edges | (2 graph_max_edges,) | its edges as node index pairs, padded with -1 (``reshape(-1, 2)``) |
     | graph_counts | (2,) | the valid nodes and edges |
@@ -86,9 +97,9 @@ class SuddenObstacleEnv(ObstacleEnv):
     ``tof`` (``ToFParams``), ``perception`` (``PipelineParams``: ``gng="gng"`` switches the
     attention off), ``effectivity``, ``include_graph``, ``warmup_cycles``, ``outcome``
     (``OutcomeParams``: the knock and stand-on thresholds), ``privileged`` (False; True adds
-    the simulator's truth for the privileged oracle: ``true_blocks`` (4 x 7: valid, centre x, y
-    in the torso's yaw frame, yaw, half length, half width, top height) and ``feet`` (4 x 3:
-    soles in the yaw frame, z above the floor), both flattened).
+    the simulator's truth for the privileged oracle: ``true_blocks`` (4 x 7, flattened: valid,
+    centre x, y in the heading frame, yaw of the length axis relative to the heading, half
+    length, half width, top height)).
     """  # noqa: E501
 
     def __init__(

@@ -13,17 +13,14 @@ from numba import njit
 PHASE_NONE = 0
 PHASE_UP = 1
 PHASE_OVER = 2
-MODE_NONE = 0
-MODE_INTERRUPT = 1
-MODE_PROVISION = 2
 
 # Index of each parameter in the packed float64 vector handed to the kernel.
 (
     P_REACH, P_SWING_TIME, P_MIN_TIME_LEFT, P_CLEARANCE, P_FOOT_RADIUS, P_MARGIN, P_TOUCH_OFF,
     P_LIFT_SPEED, P_CARRY_SPEED, P_LIFT_CLEARANCE, P_APPROACH_GAP, P_MAX_INTERRUPT_TIME,
-    P_LOOKAHEAD, P_NEAR, P_CORRIDOR, P_FORGET_BEHIND, P_FORGET_DISTANCE,
-) = range(17)  # fmt: skip
-N_PARAMS = 17
+    P_FORGET_BEHIND, P_FORGET_DISTANCE,
+) = range(14)  # fmt: skip
+N_PARAMS = 14
 
 
 @njit(cache=True)
@@ -127,68 +124,19 @@ def _steer(prm, phase, leg, box, foot, hx, hy, out):
 
 
 @njit(cache=True)
-def _provision(prm, hip, front_legs, hx, hy, boxes, n_boxes, provision):
-    """Walking provision for the nearest box in the corridor ahead, written into ``provision``.
-
-    Only boxes beyond ``near`` and within ``lookahead`` count; returns the box's index or -1.
-    """
-    fx = 0.0
-    fy = 0.0
-    for leg in front_legs:
-        fx += hip[leg, 0]
-        fy += hip[leg, 1]
-    fx /= len(front_legs)
-    fy /= len(front_legs)
-    lx, ly = -hy, hx
-    corridor = prm[P_CORRIDOR]
-    best = -1
-    best_d = np.inf
-    lateral = 0.0
-    for k in range(n_boxes):
-        a_lo, a_hi = np.inf, -np.inf
-        s_lo, s_hi = np.inf, -np.inf
-        for i in range(2):
-            for j in range(2):
-                rx = boxes[k, i, 0] - fx
-                ry = boxes[k, j, 1] - fy
-                a = rx * hx + ry * hy
-                s = rx * lx + ry * ly
-                a_lo, a_hi = min(a_lo, a), max(a_hi, a)
-                s_lo, s_hi = min(s_lo, s), max(s_hi, s)
-        if a_hi < 0.0 or a_lo > prm[P_LOOKAHEAD]:
-            continue
-        # The box blocks the corridor if its lateral extent overlaps [-corridor, corridor].
-        if s_lo > corridor or s_hi < -corridor:
-            continue
-        d = max(a_lo, 0.0)
-        if d < prm[P_NEAR]:
-            continue
-        if d < best_d:
-            best, best_d = k, d
-            # Move to the side that needs the shorter side step.
-            go_left = abs(s_lo - corridor) > abs(s_hi + corridor)
-            need = (s_hi + corridor) if go_left else (corridor - s_lo)
-            lateral = (1.0 if go_left else -1.0) * min(1.0, 0.4 + 2.5 * need)
-    provision[:] = 0.0
-    if best >= 0:
-        provision[0] = -0.3 if best_d < 0.6 else 0.0
-        provision[1] = lateral
-    return best
-
-
-@njit(cache=True)
 def effectivity_kernel(
-    prm, s_path, front_legs, t, touch, foot, hip, yaw, vx_body, vy_body, boxes,
+    prm, s_path, t, touch, foot, hip, yaw, vx_body, vy_body, boxes,
     lift_time, was_down, phase, plan_box, plan_start, memory, n_memory,
-    swinging, foothold, foothold_safe, path_safe, direction, provision,
+    swinging, foothold, foothold_safe, path_safe, direction, hit,
 ):  # fmt: skip
     """One effectivity cycle (see ``Effectivity`` for the model).
 
     State arrays (``lift_time`` .. ``memory``) are updated in place; the outputs (``swinging``
-    .. ``provision``) are written.
+    .. ``hit``) are written: ``hit`` (4,) int64 is the memory index of the box each leg's
+    foothold lies in (first) or its swing path meets, -1 none.
 
     Returns:
-        (mode, target, n_memory).
+        The new ``n_memory``.
     """
     hx, hy = np.cos(yaw), np.sin(yaw)
     lx, ly = -hy, hx
@@ -218,7 +166,7 @@ def effectivity_kernel(
     margin = prm[P_MARGIN]
     r = prm[P_FOOT_RADIUS]
     clearance4 = 4.0 * prm[P_CLEARANCE]
-    hit_box = np.full(4, -1, dtype=np.int64)
+    hit[:] = -1
     foothold_safe[:] = True
     path_safe[:] = True
     for leg in range(4):
@@ -230,7 +178,7 @@ def effectivity_kernel(
                 and foothold[leg, 1] <= memory[k, 1, 1] + margin
             ):
                 foothold_safe[leg] = False
-                hit_box[leg] = k
+                hit[leg] = k
                 break
         if not swinging[leg] or n_mem == 0:
             continue
@@ -253,8 +201,8 @@ def effectivity_kernel(
                 break
         if first >= 0:
             path_safe[leg] = False
-            if hit_box[leg] < 0:
-                hit_box[leg] = first
+            if hit[leg] < 0:
+                hit[leg] = first
     # Interrupts in progress end at touch-down (after a short grace) or on time-out.
     for leg in range(4):
         if phase[leg] != PHASE_NONE:
@@ -266,11 +214,10 @@ def effectivity_kernel(
         conflict = swinging[leg] and not (foothold_safe[leg] and path_safe[leg])
         if conflict and phase[leg] == PHASE_NONE:
             phase[leg] = PHASE_UP
-            plan_box[leg, 0] = memory[hit_box[leg], 0] - margin
-            plan_box[leg, 1] = memory[hit_box[leg], 1] + margin
+            plan_box[leg, 0] = memory[hit[leg], 0] - margin
+            plan_box[leg, 1] = memory[hit[leg], 1] + margin
             plan_start[leg] = t
     direction[:] = 0.0
-    target = -1
     wanted = np.empty(3)
     for leg in range(4):
         if phase[leg] == PHASE_NONE:
@@ -283,31 +230,4 @@ def effectivity_kernel(
         direction[leg, 0] = rx * hx + ry * hy
         direction[leg, 1] = rx * lx + ry * ly
         direction[leg, 2] = wanted[2]
-        if hit_box[leg] >= 0:
-            target = hit_box[leg]
-    mode = MODE_NONE
-    provision[:] = 0.0
-    interrupting = False
-    for leg in range(4):
-        interrupting = interrupting or phase[leg] != PHASE_NONE
-    if interrupting:
-        mode = MODE_INTERRUPT
-        if target < 0 and n_mem > 0:
-            # The remembered box nearest to the feet.
-            cx = (foot[0, 0] + foot[1, 0] + foot[2, 0] + foot[3, 0]) / 4.0
-            cy = (foot[0, 1] + foot[1, 1] + foot[2, 1] + foot[3, 1]) / 4.0
-            best_d = np.inf
-            for k in range(n_mem):
-                dx = (memory[k, 0, 0] + memory[k, 1, 0]) / 2.0 - cx
-                dy = (memory[k, 0, 1] + memory[k, 1, 1]) / 2.0 - cy
-                d = np.sqrt(dx * dx + dy * dy)
-                if d < best_d:
-                    best_d, target = d, k
-    elif n_mem > 0:
-        target = _provision(prm, hip, front_legs, hx, hy, memory, n_mem, provision)
-        if target >= 0:
-            mode = MODE_PROVISION
-            for leg in range(4):
-                direction[leg, 0] = provision[0]
-                direction[leg, 1] = provision[1]
-    return mode, target, n_mem
+    return n_mem

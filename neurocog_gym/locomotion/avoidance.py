@@ -1,4 +1,4 @@
-"""The effectivity's answer to a block the legs cannot step over: stop, side-step, walk past.
+"""The fit's answer to a block the legs cannot step over: stop, side-step, walk past.
 
 Why the AEF does not step over such a block here: the motor-neuron pools (Eq. 8 with the
 restoring term) hold a joint at most about 0.9 rad from the standing posture, so a foot rises
@@ -10,20 +10,21 @@ here a fast one: the provision's brake (``generator.py``: s_SAG below ``brake_fr
 stride down to the reversed trot at s_SAG = -1) stops the body, then the side step (s_COR) moves
 every leg's lane off the block, then the trot walks past with the heading held (s_DIR).
 
-This is the avoid reflex (``policies/avoid.py``, which drives the hips through the interrupt
-group and reads the env from outside) recast as a geometric teacher inside the effectivity: its
-states and distances are the reflex's, its outputs are the three walking-provision values, and
-the AEF network's provision head turns them into the action (``policies.AEFPolicy``). Dev
+This is the avoid reflex (the v0 ``AvoidPolicy``, which drove the hips through the interrupt
+group and read the env from outside; removed with issue 22) recast as a geometric teacher of the
+fit (``fit.py``): its states and distances are the reflex's, its outputs are the three
+walking-provision values, and the AEF network's provision head turns them into the action
+(``policies.AEFPolicy``, which runs the fit on the observation). Dev
 trials (run seed 2, sudden 0..99, success / touch / fail): the reflex 94 / 4 / 2, this teacher
 through the AEF network 81 / 14 / 5; the benchmark (seed 0, 200 sudden trials): 158 / 34 / 8,
 was 0 / 17 / 33 of 50 with the up-and-over interrupt (``52b50df:docs/avoid_notes.md``, 2026-12-01).
 
 States, for the remembered boxes that were first seen within ``sudden_range`` of the leading
 foot, and for any box taller than ``step_over_height`` that a swing meets (``adopt``: the legs
-cannot carry out the interrupt; boxes seen from afar otherwise stay with the effectivity's
-walk-around provision):
+cannot carry out the interrupt; boxes seen from afar otherwise stay with the fit's
+walk-round rule):
 
-* ``walk``: not engaged; the effectivity's own rules act.
+* ``walk``: not engaged; the fit's other rules act.
 * ``reverse``: a box overlaps a leg's lane (the band between its thigh and its foot, grown by
   the foot radius and ``margin``) and its near face is within ``trigger`` of the leading foot:
   s_SAG = -1 (the trot reversed) until every in-lane leg is ``backoff`` behind the near face,
@@ -39,7 +40,10 @@ A leg's gap to a box is measured from its most forward point below the box's top
 or sole capsule), not from the sole: the shank leans ahead of the sole at block height.
 
 Geometry is in the frame of the heading the robot had at its first cycle (``yaw0``; the obstacle
-tasks walk along it): x ahead, y left. Boxes are the effectivity's remembered world boxes.
+tasks walk along it): x ahead, y left. Boxes are the effectivity's remembered boxes; positions
+come in any horizontal frame that stays put over the episode (the world, or the odometry frame
+of ``policies.AEFPolicy``). Times count in whole control cycles: a duration is reached once it
+is within a microsecond (a sum of 0.01 s steps is not exactly a multiple of 0.01).
 """
 
 from __future__ import annotations
@@ -55,6 +59,8 @@ FOOT_RADIUS = _k.FOOT_RADIUS
 """Sole sphere radius, m (assets/quadruped.xml; the thigh and shank capsules: 0.017, 0.012)."""
 
 WALK, REVERSE, SIDE, PASS = 0, 1, 2, 3
+_T_EPS = 1e-6
+"""s, how far short of a duration a sum of control-cycle steps may fall and still reach it."""
 STATE_NAMES = ("walk", "reverse", "side", "pass")
 
 
@@ -225,7 +231,7 @@ class SuddenAvoidance:
             self.direction = 1.0 if out[_k.O_NEED_LEFT] < out[_k.O_NEED_RIGHT] else -1.0
             self._set(REVERSE, t)
         elif self.state == REVERSE:
-            if gap_in >= p.backoff and t - self.t_state >= p.t_rev:
+            if gap_in >= p.backoff and t - self.t_state >= p.t_rev - _T_EPS:
                 self._set(SIDE, t)
         elif self.state == SIDE:
             if not any_in:

@@ -16,37 +16,29 @@ Per control cycle, for each leg:
   ``clearance`` above the straight line (the nominal swing).
 * **Safety.** A foothold is unsafe when it lies in an obstacle box grown by ``margin``; a swing
   path is unsafe when any of its points (as a sphere of the foot's radius) enters such a box.
-* **Interrupt direction** (the AEF's 3-D input per leg) when a swinging leg's path or foothold is
-  unsafe: "up and over" — forward and up with a lift speed that grows with the obstacle's height
-  — unless the foothold would land on a box too long to clear, in which case "short" — back and
-  up, to the nearest safe foothold before it.
-* **Walking provision** when no swing conflicts but an obstacle lies in the corridor ahead within
-  ``lookahead``: side-step away from it (s_COR towards the side with more room), and slow down
-  while it is close (Fig. 20b: "moved left to avoid an obstacle further ahead").
-* **The fit for a block within reach** (``avoidance.py``): the legs cannot clear a 6-8 cm block
-  that appears 4-13 cm ahead of a swinging leg's hip, nor any box taller than their swing
-  clearance that a swing meets, so instead of an interrupt the provision brakes the trot to a
-  stop (reversed), side-steps and walks past. While it is engaged it overrides the rules above:
-  mode provision, its provision, no interrupt.
+* **Interrupt direction** v^l (the AEF's 3-D input per leg, Fig. 7) when a swinging leg's path
+  or foothold is unsafe: "up and over" — the foot rises, then moves forward over the block — as
+  the wanted foot velocity relative to the torso (see :class:`Effectivity`); zero for a leg
+  with no interrupt in progress.
+
+The effectivity predicts and checks; it decides nothing. Which of the AEF's output groups acts
+on these predictions — the interrupt group on v^l, or the walking provision (walk round an
+obstacle ahead, or stop, side-step and pass a block that appeared within reach) — is the fit,
+``fit.py``, which runs on the policy's side of the observation (``policies.AEFPolicy``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from neurocog_gym.locomotion import _effectivity_kernel as _k
 from neurocog_gym.locomotion._effectivity_kernel import (  # noqa: F401  (public constants)
-    MODE_INTERRUPT,
-    MODE_NONE,
-    MODE_PROVISION,
     PHASE_NONE,
     PHASE_OVER,
     PHASE_UP,
 )
-from neurocog_gym.locomotion.avoidance import AvoidanceParams, SuddenAvoidance
-from neurocog_gym.robot.names import FRONT_LEGS
 
 
 @dataclass(frozen=True)
@@ -79,21 +71,10 @@ class EffectivityParams:
     """Closest the foot may come to the grown block's near face while still below its top, m."""
     max_interrupt_time: float = 0.6
     """Longest an interrupt holds a leg, s."""
-    max_step_length: float = 0.16
-    """Longest block (along the path) a swing can clear, m."""
-    lookahead: float = 1.2
-    """Obstacles ahead closer than this change the walking provision, m."""
-    near: float = 0.2
-    """Obstacles ahead closer than this are left to the swing interrupts, m."""
-    corridor: float = 0.16
-    """Half-width of the robot's path corridor (body half-width plus margin), m."""
     forget_behind: float = 0.05
     """A remembered box is forgotten once every foot is this far past its far face, m."""
     forget_distance: float = 1.5
     """... or once it is farther than this from the torso, m."""
-    avoidance: AvoidanceParams = field(default_factory=AvoidanceParams)
-    """The stop / side-step / pass teacher for blocks that appear within reach
-    (``avoidance.py``); ``AvoidanceParams(enabled=False)`` leaves the rules above alone."""
 
 
 @dataclass
@@ -109,14 +90,11 @@ class EffectivityState:
     path_safe: np.ndarray
     """(4,) bool."""
     direction: np.ndarray
-    """(4, 3) interrupt direction per leg in the torso's yaw frame (x ahead, y left, z up): the
-    foot velocity the interrupt asks for, relative to the torso, m/s."""
-    mode: int
-    """MODE_NONE, MODE_INTERRUPT or MODE_PROVISION."""
-    provision: np.ndarray
-    """(3,) geometric teacher's walking provision (s_SAG, s_COR, s_DIR)."""
-    target: int
-    """Index of the most relevant obstacle box, or -1."""
+    """(4, 3) interrupt direction v^l per leg in the torso's yaw frame (x ahead, y left, z up):
+    the foot velocity the interrupt asks for, relative to the torso, m/s; 0 without one."""
+    hit: np.ndarray
+    """(4,) int, index in :attr:`Effectivity.memory` of the box the leg's foothold lies in
+    (checked first) or its swing path meets, -1 none."""
     phase: np.ndarray | None = None
     """(4,) int, each leg's interrupt phase: 0 none, 1 up, 2 over."""
 
@@ -155,13 +133,11 @@ class Effectivity:
             (_k.P_TOUCH_OFF, p.touch_off), (_k.P_LIFT_SPEED, p.lift_speed),
             (_k.P_CARRY_SPEED, p.carry_speed), (_k.P_LIFT_CLEARANCE, p.lift_clearance),
             (_k.P_APPROACH_GAP, p.approach_gap), (_k.P_MAX_INTERRUPT_TIME, p.max_interrupt_time),
-            (_k.P_LOOKAHEAD, p.lookahead), (_k.P_NEAR, p.near), (_k.P_CORRIDOR, p.corridor),
             (_k.P_FORGET_BEHIND, p.forget_behind), (_k.P_FORGET_DISTANCE, p.forget_distance),
         ):  # fmt: skip
             prm[index] = float(value)
         self._prm = prm
         self._s_path = np.linspace(0.0, 1.0, p.n_path)
-        self._front = np.array(FRONT_LEGS, dtype=np.int64)
         self.lift_time = np.zeros(4)
         self.was_down = np.ones(4, dtype=bool)
         self.phase = np.zeros(4, dtype=np.int64)
@@ -169,7 +145,6 @@ class Effectivity:
         self.plan_start = np.zeros(4)
         self._memory = np.zeros((self.memory_capacity, 2, 3))
         self._n_memory = 0
-        self.avoidance = SuddenAvoidance(p.avoidance)
 
     @property
     def memory(self) -> np.ndarray:
@@ -184,7 +159,6 @@ class Effectivity:
         self.plan_box[:] = 0.0
         self.plan_start[:] = 0.0
         self._n_memory = 0
-        self.avoidance.reset()
 
     def remember(
         self, boxes: np.ndarray, foot: np.ndarray, torso: np.ndarray, heading: np.ndarray
@@ -213,8 +187,6 @@ class Effectivity:
         yaw: float,
         v_body: np.ndarray,
         boxes: np.ndarray,
-        thighs: np.ndarray | None = None,
-        knees: np.ndarray | None = None,
     ) -> EffectivityState:
         """Predict footholds and swing paths and check them against ``boxes``.
 
@@ -227,44 +199,28 @@ class Effectivity:
             v_body: (3,) torso linear velocity, m/s (world).
             boxes: (K, 2, 3) perceived obstacle boxes (min/max corners), m; merged into the
                 obstacle memory (:meth:`remember`), against which everything is checked.
-            thighs: (4, 3) hip flexion joints (thigh origins), m; with ``knees``, the legs'
-                shape for the avoidance (``avoidance.py``). None: no avoidance this cycle.
-            knees: (4, 3) knees (shank origins), m.
         """
         swinging = np.empty(4, dtype=bool)
         foothold = np.empty((4, 3))
         foothold_safe = np.empty(4, dtype=bool)
         path_safe = np.empty(4, dtype=bool)
         direction = np.empty((4, 3))
-        provision = np.empty(3)
-        mode, target, self._n_memory = _k.effectivity_kernel(
-            self._prm, self._s_path, self._front, float(t),
+        hit = np.empty(4, dtype=np.int64)
+        self._n_memory = _k.effectivity_kernel(
+            self._prm, self._s_path, float(t),
             np.asarray(touch, dtype=np.float64), np.asarray(foot, dtype=np.float64),
             np.asarray(hip, dtype=np.float64), float(yaw), float(v_body[0]), float(v_body[1]),
             _as_boxes(boxes), self.lift_time, self.was_down, self.phase, self.plan_box,
             self.plan_start, self._memory, self._n_memory,
-            swinging, foothold, foothold_safe, path_safe, direction, provision,
+            swinging, foothold, foothold_safe, path_safe, direction, hit,
         )  # fmt: skip
-        if thighs is not None and knees is not None:
-            if mode == MODE_INTERRUPT and target >= 0:
-                # The fit: a box taller than a swing clears is stopped for, not stepped over.
-                self.avoidance.adopt(self._memory[target], foot)
-            avoid = self.avoidance.update(t, yaw, foot, thighs, knees, self.memory)
-            if avoid is not None:
-                # The provision's teacher overrides the rules; no interrupt is in progress.
-                mode = MODE_PROVISION
-                provision[:] = avoid
-                direction[:] = avoid  # every leg's slot carries the body motion, as the rules do
-                self.phase[:] = PHASE_NONE
         return EffectivityState(
             swinging=swinging,
             foothold=foothold,
             foothold_safe=foothold_safe,
             path_safe=path_safe,
             direction=direction,
-            mode=int(mode),
-            provision=provision,
-            target=int(target),
+            hit=hit,
             phase=self.phase.copy(),
         )
 

@@ -3,23 +3,20 @@
 One module per controller, and :func:`make_policy` (``registry.py``) to build one by name or
 file, as ``--policy`` does:
 
-* :class:`AEFPolicy` (``aef.py``; names ``aef`` and ``aef-provision``) — the paper's controller,
-  the Affordance–Effectivity Fit network applied to the env's 31 AEF inputs;
+* :class:`AEFPolicy` (``aef.py``; names ``aef`` and ``aef-provision``) — the paper's controller:
+  the fit decides from the observation which output group acts, the Affordance–Effectivity Fit
+  network gives its values; keeps per-episode state (``reset``);
 * :class:`BlindPolicy` (``blind.py``; ``blind``) — never interrupts (the paper's "improved
   process disabled", Fig. 16b);
-* :class:`AvoidPolicy` (``avoid.py``; ``avoid``) — backs off from a block that appears in front
-  of the robot, side-steps out of its path and walks past; reads the env's effectivity, so it
-  has a ``reset(env)`` to call after every ``env.reset`` (:func:`start_episode` does it for any
-  policy);
 * :class:`OraclePolicy` (``oracle.py``; ``oracle``) — the privileged scripted step-over that
-  reads the true block boxes (make its env with ``privileged=True``);
+  reads the true block boxes (make its env with ``privileged=True``); keeps per-episode state;
 * :class:`SB3Policy` (``sb3.py``; ``ppo`` and any ``.zip``) — a saved stable-baselines3 model.
 
-``base.py`` holds what they share: the action's size and :func:`start_episode`.
+``base.py`` holds what they share: the action's size and :func:`start_episode` (calls a stateful
+policy's ``reset`` after every ``env.reset``). No policy reads the env beyond its observation.
 """
 
 from neurocog_gym.policies.aef import AEFPolicy
-from neurocog_gym.policies.avoid import AvoidParams, AvoidPolicy
 from neurocog_gym.policies.base import ACTION_DIM, start_episode
 from neurocog_gym.policies.blind import BlindPolicy
 from neurocog_gym.policies.oracle import OracleParams, OraclePolicy
@@ -30,8 +27,6 @@ __all__ = [
     "ACTION_DIM",
     "POLICY_NAMES",
     "AEFPolicy",
-    "AvoidParams",
-    "AvoidPolicy",
     "BlindPolicy",
     "OracleParams",
     "OraclePolicy",

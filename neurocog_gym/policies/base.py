@@ -1,9 +1,10 @@
 """What every policy shares: the action's size and the start-of-episode hook.
 
 A policy is a callable ``policy(obs) -> action`` (a ``(15,)`` float32 array: 12 joint
-interrupts, then 3 walking-provision values, as the envs' action space). One that reads more of
-the env than its observation, or keeps state across an episode, also has ``reset(env)``, which
-:func:`start_episode` calls after every ``env.reset``.
+interrupts, then 3 walking-provision values, as the envs' action space) of the observation
+alone. One that keeps state across an episode (the AEF's fit, the oracle's legs) also has
+``reset(env)``, which :func:`start_episode` calls after every ``env.reset``; ``env`` is there
+for the hook's signature, not to be read.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The policy registry: a policy by name or file (``make_policy``, ``--policy``).
 
 The names are those of the benchmark's rows: the paper's AEF, its ablations, the blind CPG, the
-avoid reflex, the privileged oracle and the shipped PPO policy; a file is AEF weights
+privileged oracle and the shipped PPO policy; a file is AEF weights
 (``.npz``) or a stable-baselines3 model (any other path).
 """
 
@@ -9,12 +9,11 @@ from __future__ import annotations
 
 from neurocog_gym import paths
 from neurocog_gym.policies.aef import AEFPolicy
-from neurocog_gym.policies.avoid import AvoidPolicy
 from neurocog_gym.policies.blind import BlindPolicy
 from neurocog_gym.policies.oracle import OraclePolicy
 from neurocog_gym.policies.sb3 import SB3Policy, shipped_ppo_env
 
-POLICY_NAMES = ("aef", "aef-provision", "blind", "avoid", "oracle", "ppo")
+POLICY_NAMES = ("aef", "aef-provision", "blind", "oracle", "ppo")
 """Named policies; anything else is a file (AEF weights or a stable-baselines3 model)."""
 
 
@@ -25,8 +24,6 @@ def make_policy(spec: str):
     * ``"aef-provision"``: :class:`AEFPolicy` with the interrupt group off (``interrupt_gain=0``),
       only the walking provision acts;
     * ``"blind"``: :class:`BlindPolicy`;
-    * ``"avoid"``: :class:`AvoidPolicy` (the back-off / side-step reflex for sudden blocks on
-      top of ``aef-provision``; bind it with ``policy.reset(env)`` after each ``env.reset``);
     * ``"oracle"``: :class:`OraclePolicy`, the privileged scripted step-over (reads the true
       block boxes: make its env with ``privileged=True``);
     * ``"ppo"``: the shipped stable-baselines3 PPO policy (:class:`SB3Policy` on
@@ -47,8 +44,6 @@ def make_policy(spec: str):
         return policy
     if spec == "blind":
         return BlindPolicy()
-    if spec == "avoid":
-        return AvoidPolicy()
     if spec == "oracle":
         return OraclePolicy()
     if spec == "ppo":

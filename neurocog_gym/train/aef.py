@@ -6,8 +6,8 @@ Dataset rows (31 inputs, see ``locomotion.aef.INPUT_NAMES``):
   velocities v(t); the joint angles are theta(t-1); touch is noise (see ``babbling.py``); A_h, A_w,
   A_s are drawn at random (on the stand there is no object; the head must not depend on them).
   Target: the interrupt head's 12 outputs = the babbled command Theta(t-1).
-* **Provision rows** (geometric teacher): the effectivity's two provision rules — the
-  walk-around of an obstacle ahead (``_effectivity_kernel._provision``: s_SAG -0.3 or 0, s_COR,
+* **Provision rows** (geometric teacher): the fit's two provision rules — the
+  walk-around of an obstacle ahead (``_fit_kernel.walk_around_kernel``: s_SAG -0.3 or 0, s_COR,
   s_DIR 0) and the stop / side-step / pass of a block that appears within reach
   (``locomotion/avoidance.py``: s_SAG down to -1, the brake; s_COR ±1; s_DIR holding the
   heading) — fill every leg's direction slot with the body motion (s_SAG, s_COR, s_DIR) they

@@ -124,7 +124,7 @@ def test_record_video_draws_the_overlay(tmp_path):
         (["--fps", "500"], ["--fps", "100"]),
         (["--seconds", "-1"], ["--seconds", "positive"]),
         (["--env", "Nope-v0"], ["unknown env id", "NeuroCog/Walk-v1"]),
-        (["--env", "NeuroCog/Walk-v1"], ["aef_mode", "blind"]),
+        (["--env", "NeuroCog/Walk-v1"], ["remembered_blocks", "blind"]),
         (["--out", "{tmp}/v.avi"], [".mp4"]),
         (["--policy", "{tmp}/missing.zip"], ["missing.zip"]),
     ],

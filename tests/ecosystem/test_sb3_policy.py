@@ -9,13 +9,13 @@ from neurocog_gym.policies import SB3Policy, make_policy, vecnormalize_path
 
 
 class _DictEnv(gym.Env):
-    """A stand-in with the obstacle envs' kinds of keys (Box and Discrete), 15-d actions."""
+    """A stand-in with the obstacle envs' kinds of keys (Box and MultiBinary), 15-d actions."""
 
     observation_space = spaces.Dict(
         {
             "joint_vel": spaces.Box(-np.inf, np.inf, (12,), np.float32),
             "objects": spaces.Box(-np.inf, np.inf, (32,), np.float32),
-            "aef_mode": spaces.Discrete(3),
+            "foothold_safe": spaces.MultiBinary(4),
         }
     )
     action_space = spaces.Box(-1.0, 1.0, (15,), np.float32)
@@ -32,7 +32,7 @@ def _obs(rng):
     return {
         "joint_vel": rng.normal(40.0, 5.0, 12).astype(np.float32),
         "objects": rng.normal(-3.0, 1.0, 32).astype(np.float32),
-        "aef_mode": np.int64(2),
+        "foothold_safe": np.array([1, 0, 1, 1], np.int8),
     }
 
 
@@ -79,7 +79,8 @@ def test_sb3_policy_normalizes_with_the_saved_statistics(saved, name):
         action = policy(obs)
         assert all(np.array_equal(obs[k], raw[k]) for k in obs)  # the caller's obs untouched
         norm = venv.normalize_obs(raw)
-        assert np.abs(norm["joint_vel"]).max() < 5 and norm["aef_mode"] == 2
+        assert np.abs(norm["joint_vel"]).max() < 5
+        np.testing.assert_array_equal(norm["foothold_safe"], [1, 0, 1, 1])  # not normalised
         expected, _ = model.predict(norm, deterministic=True)
         unnormalized, _ = model.predict(raw, deterministic=True)
         np.testing.assert_allclose(action, expected, rtol=0, atol=1e-6)

@@ -159,9 +159,19 @@ def _module():
     return mod
 
 
+# A standing robot in its heading frame (x ahead, y left, z above the floor) and a remembered
+# block 0.6 m ahead across the left of its path: the AEF's fit walks round it (provision).
+_HIPS = np.array([[0.19, 0.07, 0.3], [0.19, -0.07, 0.3], [-0.19, 0.07, 0.3], [-0.19, -0.07, 0.3]])
+_THIGHS = _HIPS + [[0, 0.05, 0], [0, -0.05, 0], [0, 0.05, 0], [0, -0.05, 0]]
+_FEET = _THIGHS * [1, 1, 0] + [0, 0, 0.018]
+_LEGS = np.stack([_HIPS, _THIGHS, _THIGHS + [0.02, 0, -0.12]], 1)
+_BLOCK = [1.0, 0.85, 0.15, 0.0, 0.05, 0.1, 0.07]
+
+
 class _ScriptedVec:
-    """A stand-in SB3 VecEnv: observations drawn from the obstacle env's space with the AEF in
-    provision mode, reward 1 every step, every env's episode ending every 4th step."""
+    """A stand-in SB3 VecEnv: observations drawn from the obstacle env's space, with a standing
+    robot and a block far ahead to walk round (the AEF in provision mode), reward 1 every step,
+    every env's episode ending every 4th step."""
 
     def __init__(self, space, n=2, seed=0):
         self.space, self.num_envs, self.t = space, n, 0
@@ -171,8 +181,15 @@ class _ScriptedVec:
         rows = []
         for _ in range(self.num_envs):
             o = {k: np.asarray(s.sample()) for k, s in self.space.spaces.items()}
-            o["aef_mode"] = np.asarray(2)
             o["aef_input"] = self.rng.uniform(-1, 1, o["aef_input"].shape).astype(np.float32)
+            o["aef_input"][3:15] = o["interrupt_direction"] = np.zeros(12, np.float32)
+            o["torso_quat"] = np.array([1, 0, 0, 0], np.float32)
+            o["torso_lin_vel"] = np.zeros(3, np.float32)
+            o["block_met"] = np.full(4, -1, np.float32)
+            o["remembered_blocks"] = np.zeros(56, np.float32)
+            o["remembered_blocks"][:7] = _BLOCK
+            o["feet"] = _FEET.astype(np.float32).ravel()
+            o["leg_joints"] = _LEGS.astype(np.float32).ravel()
             rows.append(o)
         return {k: np.stack([r[k] for r in rows]) for k in rows[0]}
 

@@ -317,3 +317,92 @@ def test_touch_cost_is_checked_and_survives_pickling():
     for env_id in (SUDDEN, STATIC):
         env = gym.make(env_id, touch_cost=20.0)
         assert pickle.loads(pickle.dumps(env)).unwrapped.touch_cost == 20.0
+
+
+def _documented_keys(envs: set[str]) -> set[str]:
+    """The keys of docs/environments.md's observation table whose envs cell is in ``envs``."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "environments.md").read_text()
+    table = text.split("## Observation", 1)[1].split("\n## ", 1)[0]
+    keys = set()
+    for line in table.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.startswith("| `") and cells[-1] in envs:
+            keys |= {k.strip(" `") for k in cells[0].split(",")}
+    return keys
+
+
+@pytest.mark.parametrize("env_id", [SUDDEN, STATIC])
+def test_the_observation_is_perception_and_body_never_a_decision(env_id):
+    from gymnasium import spaces
+
+    env = gym.make(env_id)
+    keys = set(env.observation_space.spaces)
+    # Exactly the documented keys: a new key is a documented one; the fit's mode (once
+    # ``aef_mode``, a Discrete key) and its teacher's state are the policy's, not observed.
+    assert keys == _documented_keys({"all", "obstacle"})
+    assert not keys & {"aef_mode", "mode", "avoid_state"}
+    assert all(isinstance(s, spaces.Box | spaces.MultiBinary) and len(s.shape) == 1
+               for s in env.observation_space.spaces.values())  # fmt: skip
+    # The env holds no decision to hide: the effectivity predicts, nothing in it chooses.
+    assert not hasattr(env.unwrapped.effectivity, "avoidance")
+    assert (
+        "aef_mode" not in env.reset(seed=0)[1]
+        and "aef_mode" not in env.step(np.zeros(15, np.float32))[4]
+    )
+    assert set(gym.make(env_id, privileged=True).observation_space.spaces) == keys | {"true_blocks"}
+
+
+def test_remembered_blocks_decode_to_the_memory_and_outlive_the_view():
+    from neurocog_gym.policies.aef import boxes_in_frame, to_frame
+
+    env = gym.make(STATIC, n_blocks=(1, 1), first_distance=(0.25, 0.3))
+    obs, _ = env.reset(seed=1)
+    u = env.unwrapped
+    remembered_unseen = met = 0
+    for _ in range(250):
+        obs, _, term, trunc, _ = env.step(np.zeros(15, np.float32))
+        if term or trunc:
+            break
+        torso, yaw = u.data.xpos[u.robot.torso_body], u._yaw()
+        memory = u.effectivity.memory
+        # Decoded with the true torso pose, the rows give the memory's world boxes back.
+        boxes = boxes_in_frame(obs["remembered_blocks"], yaw, torso[:2])
+        assert len(boxes) == len(memory)
+        np.testing.assert_allclose(boxes[:, :, :2], memory[:, :, :2], rtol=0, atol=2e-5)
+        np.testing.assert_allclose(boxes[:, 1, 2], memory[:, 1, 2], rtol=0, atol=1e-6)
+        feet = to_frame(obs["feet"].reshape(4, 3), yaw, torso[:2])
+        np.testing.assert_allclose(feet, u._feet(), rtol=0, atol=2e-5)
+        joints = to_frame(obs["leg_joints"].reshape(12, 3), yaw, torso[:2]).reshape(4, 3, 3)
+        np.testing.assert_allclose(joints[:, 2], u.data.xpos[u.robot.shank_body], atol=2e-5)
+        # Which block each leg meets, and the path flag, are the effectivity's.
+        hit = u.eff.hit
+        np.testing.assert_array_equal(obs["block_met"], np.where(hit >= 0, hit, -1))
+        np.testing.assert_array_equal(obs["path_meets_block"], ~u.eff.path_safe)
+        np.testing.assert_array_equal(obs["interrupt_direction"], obs["aef_input"][3:15])
+        met += int((hit >= 0).any())
+        remembered_unseen += int(len(memory) > 0 and not obs["objects_mask"].any())
+    # The block was met by a leg, and remembered while the sensors did not report it.
+    assert met > 0 and remembered_unseen > 0
+
+
+def test_more_remembered_boxes_than_slots_keeps_the_nearest_in_memory_order():
+    from neurocog_gym.envs.obstacle import MEMORY_SLOTS
+
+    env = gym.make(STATIC)
+    env.reset(seed=0)
+    u = env.unwrapped
+    torso = u.data.xpos[u.robot.torso_body].copy()
+    eff = u.effectivity
+    # Ten boxes, memory order 0..9, at distances 1.0, 0.1, 0.9, 0.2, ... from the torso.
+    far = [1.0, 0.1, 0.9, 0.2, 0.8, 0.3, 0.7, 0.4, 0.6, 0.5]
+    for m, dx in enumerate(far):
+        c = torso[:2] + [dx, 0.0]
+        eff._memory[m] = [[c[0] - 0.01, c[1] - 0.05, 0.0], [c[0] + 0.01, c[1] + 0.05, 0.07]]
+    eff._n_memory = len(far)
+    rows, slot_of = u._remembered_blocks(np.eye(3), torso, 0.0)
+    # The two farthest (1.0 and 0.9: memory 0 and 2) are left out; the rest keep their order.
+    assert slot_of.tolist() == [-1, 0, -1, 1, 2, 3, 4, 5, 6, 7] and MEMORY_SLOTS == 8
+    np.testing.assert_allclose(rows[:, 1], [0.1, 0.2, 0.8, 0.3, 0.7, 0.4, 0.6, 0.5], atol=1e-6)
+    assert (rows[:, 0] == 1).all() and np.allclose(rows[:, 4:7], [0.01, 0.05, 0.07])

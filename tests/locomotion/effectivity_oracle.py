@@ -8,11 +8,6 @@ from __future__ import annotations
 import numpy as np
 
 from neurocog_gym.locomotion.effectivity import EffectivityParams, EffectivityState
-from neurocog_gym.robot.names import FRONT_LEGS
-
-MODE_NONE = 0
-MODE_INTERRUPT = 1
-MODE_PROVISION = 2
 
 
 def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
@@ -123,7 +118,6 @@ class EffectivityOracle:
             self.plan_box[leg] = grown[hit_box[leg]]
             self.plan_start[leg] = t
         direction = np.zeros((4, 3))
-        target = -1
         for leg in np.flatnonzero(self.phase != PHASE_NONE):
             d_world = self._steer(leg, foot[leg], heading, v)
             if d_world is None:  # past the block: the CPG sets the foot down
@@ -131,35 +125,13 @@ class EffectivityOracle:
                 continue
             rel = d_world - v  # relative to the torso
             direction[leg] = (rel @ heading, rel @ left, rel[2])
-            if hit_box[leg] >= 0:
-                target = int(hit_box[leg])
-        mode = MODE_NONE
-        provision = np.zeros(3)
-        if (self.phase != PHASE_NONE).any():
-            mode = MODE_INTERRUPT
-            if target < 0 and len(boxes):
-                target = int(
-                    np.argmin(
-                        [
-                            np.linalg.norm(b.mean(axis=0)[:2] - foot[:, :2].mean(axis=0))
-                            for b in boxes
-                        ]
-                    )
-                )
-        elif len(boxes):
-            target, provision = self._provision(hip, heading, left, boxes)
-            if target >= 0:
-                mode = MODE_PROVISION
-                direction[:] = np.array([provision[0], provision[1], 0.0])
         return EffectivityState(
             swinging=swinging,
             foothold=foothold,
             foothold_safe=foothold_safe,
             path_safe=path_safe,
             direction=direction,
-            mode=mode,
-            provision=provision,
-            target=target,
+            hit=hit_box,
             phase=self.phase.copy(),
         )
 
@@ -186,32 +158,3 @@ class EffectivityOracle:
         # Over: forward, holding the sole above the top.
         vz = float(np.clip(8.0 * (top + 0.01 - sole), -0.2, p.lift_speed))
         return p.carry_speed * heading + np.array([0.0, 0.0, vz])
-
-    def _provision(self, hip, heading, left, boxes) -> tuple[int, np.ndarray]:
-        p = self.p
-        front = hip[list(FRONT_LEGS)].mean(axis=0)
-        best, best_d = -1, np.inf
-        lateral_best = 0.0
-        for k, box in enumerate(boxes):
-            corners = np.array([[box[i, 0], box[j, 1]] for i in (0, 1) for j in (0, 1)])
-            rel = corners - front[:2]
-            ahead = rel @ heading[:2]
-            side = rel @ left[:2]
-            if ahead.max() < 0 or ahead.min() > p.lookahead:
-                continue
-            # The box blocks the corridor if its lateral extent overlaps [-corridor, corridor].
-            if side.min() > p.corridor or side.max() < -p.corridor:
-                continue
-            d = max(ahead.min(), 0.0)
-            if d < p.near:
-                continue
-            if d < best_d:
-                best, best_d = k, d
-                # Move to the side that needs the shorter side step.
-                go_left = abs(side.min() - p.corridor) > abs(side.max() + p.corridor)
-                need = (side.max() + p.corridor) if go_left else (p.corridor - side.min())
-                lateral_best = (1.0 if go_left else -1.0) * min(1.0, 0.4 + 2.5 * need)
-        if best < 0:
-            return -1, np.zeros(3)
-        slow = -0.3 if best_d < 0.6 else 0.0
-        return best, np.array([slow, lateral_best, 0.0])

@@ -1,4 +1,4 @@
-"""The stop / side-step / pass teacher of the effectivity (locomotion/avoidance.py)."""
+"""The stop / side-step / pass teacher of the fit (locomotion/avoidance.py)."""
 
 import numpy as np
 import pytest
@@ -14,12 +14,8 @@ from neurocog_gym.locomotion.avoidance import (
     SuddenAvoidance,
     _reach,
 )
-from neurocog_gym.locomotion.effectivity import (
-    MODE_INTERRUPT,
-    MODE_PROVISION,
-    Effectivity,
-    EffectivityParams,
-)
+from neurocog_gym.locomotion.effectivity import Effectivity
+from neurocog_gym.locomotion.fit import MODE_INTERRUPT, MODE_PROVISION, Fit, FitParams
 
 # A standing robot heading +x: thighs (hip joints) 0.22 m up, knees 0.02 m ahead at 0.11 m.
 THIGH = np.array(
@@ -120,25 +116,32 @@ def test_disabled_never_engages():
     assert av.update(0.0, 0.0, f, t, k, box(0.25, 0.33, 0.05, 0.25)) is None
 
 
-def test_effectivity_hands_the_teacher_to_the_provision_group():
-    eff = Effectivity(EffectivityParams())
+def _fit_cycle(eff, fit, t, touch, feet, thighs, knees, hip, boxes):
+    """One cycle as env and policy split it: the effectivity predicts, the fit decides."""
+    s = eff.step(t, touch, feet, hip, 0.0, np.array([0.5, 0.0, 0.0]), boxes)
+    return s, fit.decide(t, 0.0, s.direction, s.hit, feet, hip, thighs, knees, eff.memory)
+
+
+def test_the_fit_hands_the_teacher_to_the_provision_group():
     f, t, k = legs()
     hip = THIGH.copy()
-    v = np.array([0.5, 0.0, 0.0])
     touch = np.array([0.0, 1.0, 1.0, 0.0])  # FL swings
     b = box(0.25, 0.33, 0.05, 0.25)
-    eff.step(0.0, np.ones(4), f, hip, 0.0, v, np.zeros((0, 2, 3)), t, k)
-    s = eff.step(0.05, touch, f, hip, 0.0, v, b, t, k)
-    assert s.mode == MODE_PROVISION
-    assert s.provision.tolist() == [-1.0, 0.0, 0.0]
-    assert s.direction.tolist() == [[-1.0, 0.0, 0.0]] * 4
-    assert (s.phase == 0).all()  # no interrupt in progress while the teacher acts
-    # Without the legs' shape, the rules alone: the swinging FL meets the block -> interrupt.
-    eff2 = Effectivity(EffectivityParams())
-    eff2.step(0.0, np.ones(4), f, hip, 0.0, v, np.zeros((0, 2, 3)))
-    s2 = eff2.step(0.05, touch, f, hip, 0.0, v, b)
-    assert s2.mode == MODE_INTERRUPT
-    assert s2.phase[0] != 0
+    eff, fit = Effectivity(), Fit()
+    _fit_cycle(eff, fit, 0.0, np.ones(4), f, t, k, hip, np.zeros((0, 2, 3)))
+    s, d = _fit_cycle(eff, fit, 0.05, touch, f, t, k, hip, b)
+    # The swinging FL meets the block: the effectivity gives it an interrupt direction, and the
+    # fit answers with the teacher's stop instead (a block that appeared within reach).
+    assert s.phase[0] != 0 and s.direction[0].any()
+    assert d.mode == MODE_PROVISION
+    assert d.provision.tolist() == [-1.0, 0.0, 0.0]
+    assert d.slots.tolist() == [[-1.0, 0.0, 0.0]] * 4
+    # With the teacher off, the fit's rules alone: the interrupt acts on FL's direction.
+    eff, fit = Effectivity(), Fit(FitParams(avoidance=AvoidanceParams(enabled=False)))
+    _fit_cycle(eff, fit, 0.0, np.ones(4), f, t, k, hip, np.zeros((0, 2, 3)))
+    s, d = _fit_cycle(eff, fit, 0.05, touch, f, t, k, hip, b)
+    assert d.mode == MODE_INTERRUPT
+    np.testing.assert_array_equal(d.slots, s.direction)
 
 
 def test_a_tall_box_a_swing_meets_is_adopted_however_far_it_was_first_seen():
@@ -163,19 +166,20 @@ def test_low_boxes_and_boxes_behind_the_lead_foot_are_not_adopted():
     assert av.adopt(box(0.14, 0.20, -0.1, 0.1)[0], f)  # 1 cm behind: still taken
 
 
-def test_effectivity_adopts_the_box_an_interrupt_would_step_over():
-    eff = Effectivity(EffectivityParams())
+def test_the_fit_adopts_the_box_an_interrupt_would_step_over():
+    eff, fit = Effectivity(), Fit()
     f, t, k = legs()
     hip = THIGH.copy()
-    v = np.array([0.5, 0.0, 0.0])
     far = box(0.80, 0.90, 0.05, 0.25)
-    eff.step(0.0, np.ones(4), f, hip, 0.0, v, far, t, k)  # seen from afar: walk round it
-    assert eff.avoidance.state == WALK
+    _, d = _fit_cycle(eff, fit, 0.0, np.ones(4), f, t, k, hip, far)  # seen from afar
+    assert fit.avoidance.state == WALK and d.mode == MODE_PROVISION  # walk round it
+    assert d.provision[0] == 0.0 and d.provision[1] != 0.0
     f2, t2, k2 = legs(dx=0.55)
-    s = eff.step(0.05, np.array([0.0, 1.0, 1.0, 0.0]), f2, hip + [0.55, 0, 0], 0.0, v, far, t2, k2)
-    assert s.mode == MODE_PROVISION
-    assert s.provision[0] == -1.0
-    assert eff.avoidance.state == REVERSE
+    touch = np.array([0.0, 1.0, 1.0, 0.0])
+    _, d = _fit_cycle(eff, fit, 0.05, touch, f2, t2, k2, hip + [0.55, 0, 0], far)
+    assert d.mode == MODE_PROVISION
+    assert d.provision[0] == -1.0
+    assert fit.avoidance.state == REVERSE
 
 
 @settings(max_examples=60, deadline=None)

@@ -1,8 +1,6 @@
 import numpy as np
 
 from neurocog_gym.locomotion.effectivity import (
-    MODE_INTERRUPT,
-    MODE_NONE,
     PHASE_NONE,
     PHASE_OVER,
     PHASE_UP,
@@ -30,7 +28,7 @@ def test_foothold_prediction_for_a_swinging_leg():
     assert s.swinging.tolist() == [True, False, False, True]
     assert s.foothold[0, 0] == np.float64(expect)
     assert s.foothold[1].tolist() == FOOT[1].tolist()  # a stance leg stays where it stands
-    assert s.mode == MODE_NONE
+    assert (s.phase == PHASE_NONE).all() and not s.direction.any() and (s.hit == -1).all()
 
 
 def test_foothold_inside_a_box_is_unsafe_and_beside_it_safe():
@@ -39,6 +37,7 @@ def test_foothold_inside_a_box_is_unsafe_and_beside_it_safe():
     box = [[fh - 0.03, 0.08, 0.0], [fh + 0.03, 0.16, 0.07]]
     s = run([box])
     assert not s.foothold_safe[0] and s.foothold_safe[3]
+    assert s.hit.tolist() == [0, -1, -1, -1]  # the box FL's foothold lies in
     beside = [[fh - 0.03, 0.30, 0.0], [fh + 0.03, 0.40, 0.07]]
     s = run([beside])
     assert s.foothold_safe.all() and s.path_safe.all()
@@ -52,8 +51,8 @@ def test_interrupt_lifts_first_then_carries_the_foot_over_the_box():
     eff.step(0.0, np.ones(4), FOOT, HIP, 0.0, V, np.zeros((0, 2, 3)))
     touch = np.array([0.0, 1.0, 1.0, 0.0])
     s = eff.step(0.05, touch, FOOT, HIP, 0.0, V, box[None])
-    assert not s.path_safe[0]
-    assert s.mode == MODE_INTERRUPT and s.phase[0] == PHASE_UP
+    assert not s.path_safe[0] and s.hit[0] == 0
+    assert s.phase[0] == PHASE_UP
     d = s.direction[0]
     assert d[2] > 0  # up
     assert d[0] + V[0] <= 0  # relative to the ground: no closer to the near face while low

@@ -42,22 +42,22 @@ def _random_episode(seed: int, cycles: int = 400):
 
 @pytest.mark.parametrize("seed", range(12))
 def test_kernel_matches_the_oracle_cycle_by_cycle(seed):
-    params = EffectivityParams(margin=0.01 + 0.01 * (seed % 3), lookahead=1.5)
+    params = EffectivityParams(margin=0.01 + 0.01 * (seed % 3))
     fast, slow = Effectivity(params), EffectivityOracle(params)
-    modes = set()
+    phases, hits = set(), 0
     for args in _random_episode(seed):
         a, b = fast.step(*args), slow.step(*args)
-        for name in ("swinging", "foothold_safe", "path_safe", "phase"):
+        for name in ("swinging", "foothold_safe", "path_safe", "phase", "hit"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
-        for name in ("foothold", "direction", "provision"):
+        for name in ("foothold", "direction"):
             np.testing.assert_allclose(
                 getattr(a, name), getattr(b, name), rtol=0, atol=1e-12, err_msg=name
             )
-        assert (a.mode, a.target) == (b.mode, b.target)
         np.testing.assert_array_equal(fast.memory, slow.memory)
-        modes.add(a.mode)
-    # Every seed's walk goes past boxes: both interrupts and provisions must have been exercised.
-    assert modes == {0, 1, 2}
+        phases.update(a.phase.tolist())
+        hits += int((a.hit >= 0).sum())
+    # Every seed's walk goes past boxes: both interrupt phases and met boxes must have been seen.
+    assert phases == {0, 1, 2} and hits > 0
 
 
 def test_memory_keeps_the_newest_boxes_when_full():

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from neurocog_gym.locomotion.aef import N_INPUTS, AEFWeights, build_torch_net
-from neurocog_gym.policies import AEFPolicy, BlindPolicy
 from neurocog_gym.train.aef import AEFTrainConfig, build_dataset, train_aef
 from neurocog_gym.train.babbling import record_babbling
 
@@ -59,19 +58,6 @@ def test_dataset_layout():
     X, yi, yp, isp = build_dataset(b, rng, 0.3)
     assert X.shape[1] == 31 and isp.sum() > 0
     assert np.all(yi[isp] == 0) and np.all(yp[~isp] == 0)
-
-
-def test_policies_on_an_observation():
-    obs = {"aef_mode": 0, "aef_input": np.zeros(31, np.float32)}
-    assert np.all(AEFPolicy()(obs) == 0) and np.all(BlindPolicy()(obs) == 0)
-    x = np.zeros(31, np.float32)
-    x[3:6] = (0.4, 0.0, 0.8)  # FL: up and over
-    a = AEFPolicy()({"aef_mode": 1, "aef_input": x})
-    assert np.any(a[:3] != 0) and np.all(a[3:] == 0)  # only the named leg is interrupted
-    x = np.zeros(31, np.float32)
-    x[3:15] = np.tile([0.0, 0.8, 0.0], 4)
-    a = AEFPolicy()({"aef_mode": 2, "aef_input": x})
-    assert np.all(a[:12] == 0) and a[13] > 0.3  # side step to the left
 
 
 def test_cli_train_aef_bad_arguments(tmp_path):

@@ -1,0 +1,158 @@
+"""The fit (§5.2): which of the AEF's two output groups acts, and what the walk-change teachers ask.
+
+§5.2: "the AEF determines whether an object affects the robot's immediate needs". The
+effectivity (``effectivity.py``) predicts each leg's foothold and swing path, checks them against
+the remembered obstacle boxes and gives each interrupted leg its direction v^l; the fit decides,
+every control cycle, from those predictions and the legs' positions, which group of the AEF's
+output layer acts:
+
+* **interrupt** (mode 1) while any leg has an interrupt direction: the interrupt group drives
+  the joints of those legs;
+* **provision** (mode 2) when no swing must change but an obstacle lies in the corridor ahead
+  between ``near`` and ``lookahead``: walk round it (s_SAG -0.3 while closer than 0.6 m, s_COR
+  towards the side that needs the shorter step; Fig. 20b: "moved left to avoid an obstacle
+  further ahead");
+* **provision**, overriding both, while the stop / side-step / pass teacher is engaged
+  (``avoidance.py``): for a block that appeared within reach of the legs, or any box taller than
+  a swing clears that a swing meets (the box an interrupt would be for is offered to the teacher,
+  :meth:`SuddenAvoidance.adopt`);
+* **none** (mode 0) otherwise: the CPG walks alone.
+
+In provision mode the AEF network's per-leg direction slots carry the wanted body motion
+(s_SAG, s_COR, s_DIR) — the walk-round rule leaves s_DIR 0 — as in the network's training
+(``train/aef.py``); in interrupt mode they carry v^l.
+
+The fit keeps state across an episode (the teacher's state, the boxes it has seen, its heading):
+:meth:`Fit.reset` at every episode start. It runs on the policy's side of the observation
+(``policies.AEFPolicy`` feeds it what the obstacle envs observe); no env runs it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from neurocog_gym.locomotion import _fit_kernel as _k
+from neurocog_gym.locomotion.avoidance import AvoidanceParams, SuddenAvoidance
+from neurocog_gym.robot.names import FRONT_LEGS
+
+MODE_NONE = 0
+MODE_INTERRUPT = 1
+MODE_PROVISION = 2
+MODE_NAMES = ("none", "interrupt", "provision")
+
+
+@dataclass(frozen=True)
+class FitParams:
+    """The fit's walk-round rule and its stop / side-step / pass teacher (m)."""
+
+    lookahead: float = 1.2
+    """Obstacles ahead closer than this change the walking provision, m."""
+    near: float = 0.2
+    """Obstacles ahead closer than this are left to the swing interrupts, m."""
+    corridor: float = 0.16
+    """Half-width of the robot's path corridor (body half-width plus margin), m."""
+    avoidance: AvoidanceParams = field(default_factory=AvoidanceParams)
+    """The stop / side-step / pass teacher for blocks that appear within reach
+    (``avoidance.py``); ``AvoidanceParams(enabled=False)`` leaves the two rules above alone."""
+
+
+@dataclass
+class FitDecision:
+    """One cycle's decision."""
+
+    mode: int
+    """MODE_NONE, MODE_INTERRUPT or MODE_PROVISION."""
+    provision: np.ndarray
+    """(3,) the teachers' walking provision (s_SAG, s_COR, s_DIR); zeros unless provision."""
+    slots: np.ndarray
+    """(4, 3) the AEF network's direction inputs: v^l (interrupt), the provision in every leg's
+    slot (provision), zeros (none)."""
+    target: int
+    """Index of the box the decision is about (interrupt: the box met; provision by the
+    walk-round rule: the box walked round), -1 none or the teacher's."""
+
+
+class Fit:
+    """The per-cycle decision (module docstring); one instance per episode stream."""
+
+    def __init__(self, params: FitParams | None = None):
+        self.p = params or FitParams()
+        self.avoidance = SuddenAvoidance(self.p.avoidance)
+        self._front = np.array(FRONT_LEGS, dtype=np.int64)
+
+    def reset(self) -> None:
+        """Forget the teacher's state and the boxes seen (a new episode)."""
+        self.avoidance.reset()
+
+    def decide(
+        self,
+        t: float,
+        yaw: float,
+        direction: np.ndarray,
+        hit: np.ndarray,
+        feet: np.ndarray,
+        hips: np.ndarray,
+        thighs: np.ndarray,
+        knees: np.ndarray,
+        boxes: np.ndarray,
+    ) -> FitDecision:
+        """One control cycle's decision.
+
+        Positions are in one horizontal frame that stays put over the episode (the world, or
+        the policy's odometry frame), z above the floor.
+
+        Args:
+            t: time since the episode start, s.
+            yaw: torso heading in that frame, rad.
+            direction: (4, 3) the effectivity's interrupt directions v^l (torso yaw frame).
+            hit: (4,) int, the box of ``boxes`` each leg's foothold or swing path meets, -1.
+            feet: (4, 3) sole centres, m.
+            hips: (4, 3) hip (abduction joint) positions, m.
+            thighs: (4, 3) hip flexion joints (thigh origins), m.
+            knees: (4, 3) knees (shank origins), m.
+            boxes: (K, 2, 3) the remembered obstacle boxes (min/max corners), m.
+        """
+        direction = np.asarray(direction, dtype=np.float64).reshape(4, 3)
+        boxes = np.ascontiguousarray(np.asarray(boxes, dtype=np.float64).reshape(-1, 2, 3))
+        feet = np.ascontiguousarray(feet, dtype=np.float64)
+        hips = np.ascontiguousarray(hips, dtype=np.float64)
+        thighs = np.ascontiguousarray(thighs, dtype=np.float64)
+        knees = np.ascontiguousarray(knees, dtype=np.float64)
+        p = self.p
+        provision = np.zeros(3)
+        slots = np.zeros((4, 3))
+        target = int(_k.interrupt_target(direction, np.asarray(hit, dtype=np.int64), feet, boxes))
+        mode = MODE_NONE
+        if direction.any():
+            mode = MODE_INTERRUPT
+            slots[:] = direction
+        elif len(boxes):
+            target = int(
+                _k.walk_around_kernel(
+                    hips,
+                    self._front,
+                    np.cos(yaw),
+                    np.sin(yaw),
+                    boxes,
+                    p.lookahead,
+                    p.near,
+                    p.corridor,
+                    provision,
+                )  # fmt: skip
+            )
+            if target >= 0:
+                mode = MODE_PROVISION
+                slots[:, 0] = provision[0]
+                slots[:, 1] = provision[1]
+        if mode == MODE_INTERRUPT and target >= 0:
+            # The fit: a box taller than a swing clears is stopped for, not stepped over.
+            self.avoidance.adopt(boxes[target], feet)
+        avoid = self.avoidance.update(t, yaw, feet, thighs, knees, boxes)
+        if avoid is not None:
+            mode = MODE_PROVISION
+            provision[:] = avoid
+            slots[:] = avoid  # every leg's slot carries the body motion, as the rules do
+            target = -1
+        return FitDecision(mode=mode, provision=provision, slots=slots, target=target)
