@@ -5,14 +5,15 @@ Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers mult
 ``--seeds`` seeds, the first 2 s left out, and is kept when its cost is lower. Cost per seed:
 
 * 100 for a fall, plus 10 per second it fell short;
-* 10 (``--speed_weight``) x |speed - 0.5 m/s| (forward x displacement per second);
+* 10 (``--speed_weight``) x |speed - 0.5 m/s| (``--speed``; forward x displacement per second);
 * per leg: the median swing clearance below 3.2 cm or above 4.8 cm (per cm), half the amount by
   which its highest swing exceeds 5.8 cm;
 * |lateral drift| / 6 m;
 * 20 x the share of time both feet of one side are off the ground (a pace-like gait);
 * 0.3 x short touch-downs (contacts under 80 ms) per second;
 * with ``--mismatch W``: W x the share of time a foot's contact disagrees with its CPG phase
-  (in the air while the CPG stands it, or down while it swings); with ``--swing S``: 30 per second
+  (in the air while the CPG stands it, or down while it swings); with ``--swing S``: 30
+  (``--swing_weight``) per second
   by which the median swing is shorter than S; with ``--hip_height H``: 100 per metre by which
   the mean hip height falls short of H (all three used for body v2, off by default).
 
@@ -73,6 +74,10 @@ class Args:
     """Shortest wanted median swing (sole above 4 mm), s; 30 per second short (0: not used)."""
     speed_weight: float = 10.0
     """Cost per m/s of speed error."""
+    speed: float = 0.5
+    """Wanted walking speed, m/s."""
+    swing_weight: float = 30.0
+    """Cost per second by which the median swing is shorter than ``--swing``."""
     hip_height: float = 0.0
     """Lowest wanted mean hip height while walking, m; 100 per metre below it (0: not used)."""
     cma: bool = False
@@ -150,6 +155,8 @@ def cost(
     swing: float = 0.0,
     speed_weight: float = 10.0,
     hip_height: float = 0.0,
+    speed: float = 0.5,
+    swing_weight: float = 30.0,
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
@@ -159,12 +166,12 @@ def cost(
             c += 100.0 + 10.0 * (seconds - s["t"])
             if "speed" not in s:
                 continue
-        c += speed_weight * abs(s["speed"] - 0.5)
+        c += speed_weight * abs(s["speed"] - speed)
         for med, top in zip(s["clear"], s["top"], strict=True):
             c += 100 * max(0.0, 0.032 - med) + 100 * max(0.0, med - 0.048)
             c += 50 * max(0.0, top - 0.058)
         c += abs(s["drift"]) / 6.0 + 20.0 * s["side"] + 0.3 * s["short"]
-        c += mismatch * s["mismatch"] + 30.0 * max(0.0, swing - s["swing"])
+        c += mismatch * s["mismatch"] + swing_weight * max(0.0, swing - s["swing"])
         c += 100.0 * max(0.0, hip_height - s["hip_height"])
     return c
 
@@ -222,7 +229,8 @@ def main(argv: list[str] | None = None) -> None:
         best = dataclasses.replace(best, **json.loads(Path(args.start).read_text()))
     rng = np.random.default_rng(args.rng)
     extra = {"mismatch": args.mismatch, "swing": args.swing, "speed_weight": args.speed_weight,
-             "hip_height": args.hip_height}  # fmt: skip
+             "hip_height": args.hip_height, "speed": args.speed,
+             "swing_weight": args.swing_weight}  # fmt: skip
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
