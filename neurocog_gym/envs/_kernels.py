@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -268,3 +269,26 @@ def step_over_step(
             elif u1 > hx and state[k, f] == 1:
                 crossed[k, f] = True
                 state[k, f] = 0
+
+
+@njit(cache=True)
+def depth_image(depth, valid, rows, cols, range_m, out):  # pragma: no cover - compiled
+    """The ``depth`` observation: the ToF frame resampled and quantised to uint8.
+
+    Args:
+        depth: (S, H, W) float32, metres, z-depth of each sensor's pixels (``ToFFrame.depth``).
+        valid: (S, H, W) bool, a return within the range gate (``ToFFrame.valid``).
+        rows: (h,) int64, the source row of each image row (nearest pixel).
+        cols: (w,) int64, the source column of each image column.
+        range_m: metres of depth that map to 255 (and beyond, clipped).
+        out: (S, h, w) uint8, written: round(255 * depth / range_m), 255 where invalid.
+    """
+    scale = 255.0 / range_m
+    for s in range(out.shape[0]):
+        for i in range(out.shape[1]):
+            r = rows[i]
+            for j in range(out.shape[2]):
+                c = cols[j]
+                # A select, not a branch: the loop runs a third faster.
+                level = min(depth[s, r, c] * scale + 0.5, 255.0)
+                out[s, i, j] = np.uint8(level) if valid[s, r, c] else np.uint8(255)

@@ -44,6 +44,28 @@ Also in ``info``: ``interrupt_cycles`` / ``provision_cycles``, the control cycle
 action had a non-zero interrupt group (entries 0..11) / provision group (12..14), and
 ``time_to_pass_from_appear``, s from the block's appearance (static: from t = 0) to the pass.
 The episode terminates when the robot passes (or falls); the time limit truncates it.
+
+``observation_mode`` (for end-to-end learning from depth, as in Agarwal et al. 2022 and ViNL):
+
+* ``"default"``: the keys of ``SuddenObstacleEnv``'s table, every one 1-D.
+* ``"depth"``: the same keys plus ``depth``, the latest ToF frame as a uint8 image
+  ``(4, DEPTH_HEIGHT, DEPTH_WIDTH)`` = (4, 43, 56), channels first: channel k is sensor
+  ``tof_k`` (0 the leftmost, yawed +60°; 3 the rightmost, -60°), row 0 the top of its image,
+  column 0 its left side. Each sensor's image is resampled to 43 × 56 by nearest pixel (the
+  default sensors are 43 × 56 already, a quarter of the Pico Flexx's 172 × 224 per axis; a
+  full-resolution frame is read at every fourth pixel). Value = round(255 · z / 2 m) for a
+  z-depth z along the sensor's optical axis (``DEPTH_RANGE`` 2 m, 7.8 mm a level), 255 for
+  z >= 2 m and for a pixel without a return in the sensors' range gate. The image changes only
+  when a frame comes (45 fps: every 2 or 3 control cycles) and holds in between. It is an image
+  by stable-baselines3's rules (``is_image_space``; 43 and 56 are over NatureCNN's 36), so
+  ``MultiInputPolicy`` puts a CNN on it and MLPs on the rest. The attention pipeline runs.
+* ``"depth_only"``: Walk's proprioceptive keys, ``feet``, ``leg_joints`` and ``depth``
+  (``true_blocks`` with ``privileged``): the attention pipeline does not run (no DD-GNG, no
+  affordances, about 40 % of a step saved) and the keys built from it are left out
+  (``objects``, ``objects_mask``, ``aef_input``, ``interrupt_direction``, ``foothold``,
+  ``foothold_safe``, ``path_meets_block``, ``block_met``, ``remembered_blocks``). The
+  effectivity still predicts the footholds (against no perceived box), where the sudden block
+  is placed, so the task is the same. Not with ``include_graph``.
 """
 
 from __future__ import annotations
@@ -56,7 +78,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
-from neurocog_gym.envs._kernels import block_outcome_step, step_over_step
+from neurocog_gym.envs._kernels import block_outcome_step, depth_image, step_over_step
 from neurocog_gym.envs.base import QuadrupedEnv, _as_slice
 from neurocog_gym.locomotion.effectivity import Effectivity, EffectivityParams, EffectivityState
 from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
@@ -74,6 +96,14 @@ BLOCK_FIELDS = ("valid", "x", "y", "yaw", "half_length", "half_width", "top")
 """One row of ``remembered_blocks`` and ``true_blocks``."""
 MEMORY_SLOTS = 8
 """Remembered boxes in the ``remembered_blocks`` observation (the nearest, if there are more)."""
+OBSERVATION_MODES = ("default", "depth", "depth_only")
+"""Values of ``observation_mode`` (module docstring)."""
+DEPTH_HEIGHT = 43
+"""Rows of each sensor's image in the ``depth`` observation."""
+DEPTH_WIDTH = 56
+"""Columns of each sensor's image in the ``depth`` observation."""
+DEPTH_RANGE = 2.0
+"""m, z-depth that maps to 255 in the ``depth`` observation (and beyond it, clipped)."""
 
 
 @dataclass(frozen=True)
@@ -120,8 +150,23 @@ class ObstacleEnv(QuadrupedEnv):
         privileged: bool = False,
         outcome: OutcomeParams | None = None,
         affordance_source: str | None = None,
+        observation_mode: str = "default",
         **kwargs,
     ):
+        if observation_mode not in OBSERVATION_MODES:
+            raise ValueError(
+                f"observation_mode must be one of {OBSERVATION_MODES}, got {observation_mode!r}"
+            )
+        if observation_mode == "depth_only" and include_graph:
+            raise ValueError(
+                "include_graph needs the attention pipeline, which observation_mode='depth_only' "
+                "does not run"
+            )
+        self.observation_mode = observation_mode
+        tof_params = tof or ToFParams(backend="numba")
+        self._n_sensors = tof_params.n_sensors
+        self._with_depth = observation_mode != "default"
+        self._perceive = observation_mode != "depth_only"
         self.include_graph = bool(include_graph)
         self.privileged = bool(privileged)
         self.graph_max_nodes = int(graph_max_nodes)
@@ -136,9 +181,9 @@ class ObstacleEnv(QuadrupedEnv):
             graph_max_nodes=graph_max_nodes,
             graph_max_edges=graph_max_edges, pass_margin=pass_margin,
             warmup_cycles=warmup_cycles, outcome=outcome, privileged=privileged,
-            affordance_source=affordance_source, **kwargs,
+            affordance_source=affordance_source, observation_mode=observation_mode, **kwargs,
         )  # fmt: skip
-        self.tof = ToFArray(self.model, tof or ToFParams(backend="numba"))
+        self.tof = ToFArray(self.model, tof_params)
         # affordance_source: "map" (sizes from the DD-GNG graph alone, the paper's) or
         # "points" (the raw-point refinement); None keeps ``perception``'s ("points").
         self.pipeline = AttentionPipeline(
@@ -147,6 +192,11 @@ class ObstacleEnv(QuadrupedEnv):
             affordance_source=affordance_source,
         )
         self.effectivity = Effectivity(effectivity)
+        tp = self.tof.params
+        # Nearest source pixel of each image row and column (the identity at the default size).
+        self._depth_rows = np.rint(np.linspace(0, tp.height - 1, DEPTH_HEIGHT)).astype(np.int64)
+        self._depth_cols = np.rint(np.linspace(0, tp.width - 1, DEPTH_WIDTH)).astype(np.int64)
+        self._depth_image = np.full((tp.n_sensors, DEPTH_HEIGHT, DEPTH_WIDTH), 255, np.uint8)
         self.pool = ObstaclePool(self.model)
         self.pass_margin = float(pass_margin)
         self.warmup_cycles = int(warmup_cycles)
@@ -170,6 +220,16 @@ class ObstacleEnv(QuadrupedEnv):
     def _observation_spaces(self) -> dict[str, spaces.Space]:
         s = super()._observation_spaces()
         f32 = np.float32
+        if self._with_depth:
+            shape = (self._n_sensors, DEPTH_HEIGHT, DEPTH_WIDTH)
+            s["depth"] = spaces.Box(0, 255, shape, np.uint8)
+        if not self._perceive:
+            s["feet"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
+            s["leg_joints"] = spaces.Box(-np.inf, np.inf, (4 * 3 * 3,), f32)
+            if self.privileged:
+                nb = len(BLOCK_FIELDS)
+                s["true_blocks"] = spaces.Box(-np.inf, np.inf, (TRUE_BLOCK_SLOTS * nb,), f32)
+            return s
         # Every key 1-D (SB3's check_env and its MultiInputPolicy take vectors or images): the
         # tables are flattened row by row; ``obs[k].reshape(N_OBJECTS, len(OBJECT_FIELDS))``.
         s["objects"] = spaces.Box(-np.inf, np.inf, (N_OBJECTS * len(OBJECT_FIELDS),), f32)
@@ -215,11 +275,16 @@ class ObstacleEnv(QuadrupedEnv):
         frame = tof.sense(d, copy=False) if force_frame else tof.maybe_sense(d, copy=False)
         if frame is not None:
             self.frame = frame
+            if self._with_depth:
+                depth_image(frame.depth, frame.valid, self._depth_rows, self._depth_cols,
+                            DEPTH_RANGE, self._depth_image)  # fmt: skip
+            if not self._perceive:
+                return
             # The facets face the sensors' mean position: one mean per frame, not per cycle
             # (the sum over the sensors divided by their number, as ndarray.mean computes it).
             origins = frame.origins
             self._frame_origin = np.add.reduce(origins, axis=0) / origins.shape[0]
-        if self.frame is None:
+        if self.frame is None or not self._perceive:
             return
         if yaw is None:
             yaw = self._yaw()
@@ -278,7 +343,8 @@ class ObstacleEnv(QuadrupedEnv):
         mujoco.mj_forward(self.model, self.data)
         # The robot has looked at the scene before the trial starts: warm the map up.
         self._sense_and_perceive(force_frame=True)
-        self.pipeline.warm_up(self.frame.points, self._frame_origin, self.warmup_cycles)
+        if self._perceive:
+            self.pipeline.warm_up(self.frame.points, self._frame_origin, self.warmup_cycles)
         self.tof.reset(seed=int(self.np_random.integers(2**31)))
         self._update_effectivity()
 
@@ -495,10 +561,32 @@ class ObstacleEnv(QuadrupedEnv):
         yaw = self._yaw() if self._yaw_now is None else self._yaw_now
         c, s = np.cos(yaw), np.sin(yaw)
         rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
-        objects, mask, (a_h, a_w, a_s) = self._objects(rot)
-        eff = self.eff
         d, r = self.data, self.robot
         torso = d.xpos[r.torso_body]
+        if self._perceive:
+            self._perception_obs(obs, rot, torso, yaw)
+        joints = np.stack([d.xpos[r.hip_body], d.xpos[r.thigh_body], d.xpos[r.shank_body]], 1)
+        obs.update(
+            feet=_heading_frame(self._feet(), rot, torso).ravel(),
+            leg_joints=_heading_frame(joints.reshape(12, 3), rot, torso).ravel(),
+        )
+        if self.privileged:
+            obs["true_blocks"] = self._true_blocks(rot, torso)
+        if self.include_graph:
+            g = self.pipeline.net.padded(self.graph_max_nodes, self.graph_max_edges)
+            obs["graph_nodes"] = g.nodes.astype(np.float32).ravel()
+            obs["graph_edges"] = g.edges.astype(np.int64).ravel()
+            obs["graph_counts"] = np.array([g.n_nodes, g.n_edges], np.int64)
+        if self._with_depth:
+            obs["depth"] = self._depth_image.copy()  # the buffer changes with the next frame
+        return obs
+
+    def _perception_obs(
+        self, obs: dict[str, np.ndarray], rot: np.ndarray, torso: np.ndarray, yaw: float
+    ) -> None:
+        """Add the keys built from the perception and the effectivity to ``obs``."""
+        objects, mask, (a_h, a_w, a_s) = self._objects(rot)
+        eff = self.eff
         if eff is None:
             direction = np.zeros((4, 3))
             foothold = self._feet().copy()
@@ -519,7 +607,6 @@ class ObstacleEnv(QuadrupedEnv):
         aef[3:15] = direction.ravel()
         aef[15:27] = obs["joint_pos"]
         aef[27:31] = obs["touch"]
-        joints = np.stack([d.xpos[r.hip_body], d.xpos[r.thigh_body], d.xpos[r.shank_body]], 1)
         obs.update(
             objects=objects.ravel(),
             objects_mask=mask,
@@ -530,17 +617,7 @@ class ObstacleEnv(QuadrupedEnv):
             path_meets_block=meets,
             block_met=met,
             remembered_blocks=blocks.ravel(),
-            feet=_heading_frame(self._feet(), rot, torso).ravel(),
-            leg_joints=_heading_frame(joints.reshape(12, 3), rot, torso).ravel(),
         )
-        if self.privileged:
-            obs["true_blocks"] = self._true_blocks(rot, torso)
-        if self.include_graph:
-            g = self.pipeline.net.padded(self.graph_max_nodes, self.graph_max_edges)
-            obs["graph_nodes"] = g.nodes.astype(np.float32).ravel()
-            obs["graph_edges"] = g.edges.astype(np.int64).ravel()
-            obs["graph_counts"] = np.array([g.n_nodes, g.n_edges], np.int64)
-        return obs
 
     def _remembered_blocks(
         self, rot: np.ndarray, torso: np.ndarray, yaw: float
