@@ -132,6 +132,7 @@ def _cmd_bench(args) -> int:
         out=args.out, scenarios=scenarios, trials=args.trials, seed=args.seed, policy=args.policy,
         attention=args.attention, max_seconds=args.max_seconds, workers=args.workers,
         ray_address=args.ray_address, resume=args.resume,
+        affordance_source=args.affordance_source,
     )  # fmt: skip
     res = run_benchmark(cfg)
     for s in scenarios:
@@ -269,8 +270,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "step-over script), ppo (the shipped PPO policy: "
                         "trained on v0, refused until retrained on v1), AEF weights (.npz) or "
                         "a stable-baselines3 model (.zip)")  # fmt: skip
-    p.add_argument("--attention", choices=("on", "off"), default="on",
-                   help="off: plain GNG instead of DD-GNG attention (the ablation)")  # fmt: skip
+    p.add_argument("--attention", choices=("on", "off", "mlgng"), default="on",
+                   help="off: plain GNG instead of DD-GNG attention (the ablation); mlgng: "
+                        "the multi-layer GNG baseline of §7.1")  # fmt: skip
+    p.add_argument("--affordance-source", choices=("points", "map"), default=None,
+                   help="the envs' affordance_source: map (sizes from the graph alone, the "
+                        "paper's) or points (the raw-point refinement); None: the env's "
+                        "default (points)")  # fmt: skip
     p.add_argument("--max-seconds", type=_positive_float, default=None,
                    help="simulated seconds per trial (None: 7 s sudden, 10 s static)")  # fmt: skip
     p.add_argument("--workers", type=_positive_int, default=None,

@@ -18,7 +18,8 @@ Each trial also records ``stepped_over``: every block was crossed above its foot
 least one front and one hind foot (not walked round).
 
 The paper's counts (Table 4, a real robot, 50 trials each) are in :data:`PAPER_TABLE4`, its
-failure analysis (Table 5) in :data:`PAPER_TABLE5`.
+failure analysis (Table 5) in :data:`PAPER_TABLE5`, its §6.2 latencies in
+:data:`PAPER_LATENCY`.
 """
 
 from __future__ import annotations
@@ -42,6 +43,22 @@ PAPER_TABLE5: dict[str, dict[str, float]] = {
     "success": {"best": 0.92, "time_to_best": 0.45, "at_0_5": 0.92},
     "fail": {"best": 0.89, "time_to_best": 0.75, "at_0_5": 0.48},
 }
+
+#: §6.2 and Fig. 10 (simulation, one trial), s after the sudden block appeared: the first
+#: non-homogeneous nodes "0.1 s after obstacle was given", the accurate affordance "0.11 s
+#: after" that, and the swing sent to the safe area "in this time" (our reading: at the
+#: accurate affordance, 0.21 s).
+PAPER_LATENCY: dict[str, float] = {
+    "first_nonhomogeneous_s": 0.10,
+    "accurate_s": 0.21,
+    "first_interrupt_s": 0.21,
+}
+
+LATENCY_KEYS: tuple[str, ...] = ("first_nonhomogeneous_s", "accurate_s", "first_interrupt_s")
+"""The §6.2 chain in a trial record's ``latency`` (``bench.runner.LatencyProbe``)."""
+
+ACCURATE_WITHIN = 0.25
+"""s: issue 23's latency target, an accurate affordance within this of the appearance."""
 
 Z95 = 1.959963984540054
 """Two-sided 95 % standard normal quantile."""
@@ -137,6 +154,72 @@ def failure_analysis(records: Iterable[Mapping]) -> dict:
     return out
 
 
+def similarity_by_outcome(records: Iterable[Mapping]) -> dict:
+    """Table 5's three measures averaged over each outcome apart (success, touch, fail).
+
+    As :func:`failure_analysis`, but touch is a group of its own instead of joining success.
+
+    Returns:
+        ``{"success": {"n", "best", "time_to_best", "at_0_5"}, "touch": {...}, "fail": {...}}``;
+        ``n`` counts the trials of the outcome, the means leave out missing values (None when
+        no trial of the outcome has one).
+    """
+    groups: dict[str, list[Mapping]] = {o: [] for o in OUTCOMES}
+    for r in records:
+        groups[r["outcome"]].append(r.get("similarity") or {})
+    return {
+        name: {
+            "n": len(sims),
+            "best": _mean([s.get("best") for s in sims]),
+            "time_to_best": _mean([s.get("time_to_best") for s in sims]),
+            "at_0_5": _mean([s.get("at_0_5") for s in sims]),
+        }
+        for name, sims in groups.items()
+    }
+
+
+def latency_summary(records: Iterable[Mapping], within: float = ACCURATE_WITHIN) -> dict:
+    """The §6.2 chain over the trials that carry a ``latency`` (sudden trials).
+
+    A trial in which an event never happened counts as infinitely late, so the median is the
+    time by which half the trials had the event (None when fewer than half had it at all).
+
+    Args:
+        records: trial records; those without a ``latency`` (static, older runs) are left out.
+        within: s, the window of ``accurate_within``.
+
+    Returns:
+        ``{"n", "accurate_within": share of trials with an accurate affordance at most
+        ``within`` s after the appearance, "within": within, and per key of
+        :data:`LATENCY_KEYS` {"median", "happened" (trials with the event)}}``; shares are None
+        when ``n`` is 0.
+    """
+    lats = [r["latency"] for r in records if r.get("latency")]
+    n = len(lats)
+    out: dict = {"n": n, "within": within}
+    for key in LATENCY_KEYS:
+        v = np.array([math.inf if x.get(key) is None else float(x[key]) for x in lats])
+        med = float(np.median(v)) if n else math.inf
+        out[key] = {
+            "median": med if math.isfinite(med) else None,
+            "happened": int(np.isfinite(v).sum()),
+        }
+    acc = [x.get("accurate_s") for x in lats]
+    out["accurate_within"] = (
+        sum(a is not None and a <= within + 1e-9 for a in acc) / n if n else None
+    )
+    return out
+
+
+def latency_by_outcome(records: Iterable[Mapping], within: float = ACCURATE_WITHIN) -> dict:
+    """:func:`latency_summary` over all trials (``"all"``) and over each outcome apart."""
+    records = list(records)
+    out = {"all": latency_summary(records, within)}
+    for o in OUTCOMES:
+        out[o] = latency_summary([r for r in records if r["outcome"] == o], within)
+    return out
+
+
 def scenario_summary(records: Iterable[Mapping]) -> dict:
     """Everything ``summary.json`` says about one scenario: the tally plus means and Table 5."""
     records = list(records)
@@ -155,4 +238,6 @@ def scenario_summary(records: Iterable[Mapping]) -> dict:
         [(r.get("perception_ms") or {}).get("max") or 0.0 for r in records], default=None
     )
     out["failure_analysis"] = failure_analysis(records)
+    out["similarity_by_outcome"] = similarity_by_outcome(records)
+    out["latency"] = latency_by_outcome(records)
     return out

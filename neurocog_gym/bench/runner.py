@@ -23,6 +23,11 @@ inside the placed blocks' boxes grown by ``grow`` (3 cm) and above ``min_z`` (1 
 is not the obstacle's surface) are matched, with their facet normals, to the true surface of
 every placed block (:func:`~neurocog_gym.perception.similarity.box_surface_reference`, 1 cm
 samples, top and four sides) by :func:`~neurocog_gym.perception.similarity.surface_match`.
+
+Latency chain (§6.2, Fig. 10), sudden trials only (:class:`LatencyProbe`): seconds from the
+block's appearance to the first non-homogeneous nodes, to the first accurate affordance and to
+the first control cycle with a non-zero interrupt group, each None when it never happened
+before the trial ended. The definitions are those of ``scripts/bench_affordance_map.py``.
 """
 
 from __future__ import annotations
@@ -53,6 +58,15 @@ ENV_IDS: dict[str, str] = {
 }
 CONTROL_DT = 0.01
 """s, the envs' control cycle (SPEC §9)."""
+GNG_OF_ATTENTION: dict[str, str] = {"on": "ddgng", "off": "gng", "mlgng": "mlgng"}
+"""``--attention`` value -> ``PipelineParams.gng``: DD-GNG, plain GNG (the ablation), or the
+multi-layer GNG baseline of §7.1 (no attention either)."""
+AFFORDANCE_SOURCES: tuple[str, ...] = ("points", "map")
+"""``--affordance-source`` values (the obstacle envs' ``affordance_source`` keyword)."""
+ACCURATE_HEIGHT = 0.01
+"""m: an affordance is accurate when its height is within this of the block's (issue 23)."""
+ACCURATE_LENGTH = 0.02
+"""m: ... and its length (along the robot's heading) within this of the block's."""
 PAPER_TRIALS = 50
 """Trials per scenario in the paper (§6.5.1, §6.5.2)."""
 
@@ -91,7 +105,9 @@ class BenchConfig:
     """"aef", "aef-provision", "blind", "oracle", "ppo" (the shipped PPO policy), AEF weights
     (.npz) or a saved stable-baselines3 model."""
     attention: str = "on"
-    """"on": DD-GNG attention; "off": plain GNG (the ablation)."""
+    """"on": DD-GNG attention; "off": plain GNG (the ablation); "mlgng": ML-GNG (§7.1)."""
+    affordance_source: str | None = None
+    """The envs' ``affordance_source``: "points", "map", or None for the env's default."""
     max_seconds: float | None = None
     """Simulated seconds per trial; None: the registration's limit (sudden 7 s, static 10 s)."""
     workers: int | None = None
@@ -118,8 +134,17 @@ class BenchConfig:
             raise ValueError(f"trials must be a positive integer, got {self.trials}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed}")
-        if self.attention not in ("on", "off"):
-            raise ValueError(f"attention must be 'on' or 'off', got {self.attention!r}")
+        if self.attention not in GNG_OF_ATTENTION:
+            raise ValueError(
+                f"attention must be one of {tuple(GNG_OF_ATTENTION)}, got {self.attention!r}"
+            )
+        if self.affordance_source is not None and self.affordance_source not in (
+            AFFORDANCE_SOURCES
+        ):
+            raise ValueError(
+                f"affordance_source must be one of {AFFORDANCE_SOURCES} or None, "
+                f"got {self.affordance_source!r}"
+            )
         if self.max_seconds is not None and not (
             math.isfinite(self.max_seconds) and self.max_seconds >= CONTROL_DT
         ):
@@ -135,6 +160,7 @@ class BenchConfig:
             "attention": self.attention,
             "run_seed": self.seed,
             "max_seconds": self.max_seconds,
+            "affordance_source": self.affordance_source,
         }
 
 
@@ -267,6 +293,137 @@ class SimilarityProbe:
         }
 
 
+class LatencyProbe:
+    """The §6.2 chain of one sudden trial (Fig. 10), timed from the block's appearance.
+
+    The block is the one placed over the swinging leg's foothold (the first block of the pool;
+    a second block side by side is not timed). Definitions, as in
+    ``scripts/bench_affordance_map.py``:
+
+    * *first non-homogeneous nodes* (§6.2): the first perception step with a graph node over
+      the block's footprint higher than the raised-node tolerance
+      (``AffordanceParams.raised_node_tolerance``, 2 cm) above the detected ground level;
+    * *accurate affordance*: the first perception step whose object on the block (the object
+      overlapping its footprint with the most nodes,
+      :func:`~neurocog_gym.bench.perception_scenes.object_on`) has its height within
+      :data:`ACCURATE_HEIGHT` and its length along the robot's heading within
+      :data:`ACCURATE_LENGTH` of the block's;
+    * *first interrupt*: the start of the first control cycle at or after the appearance whose
+      clipped action had a non-zero interrupt group (the env's ``interrupt_cycles`` count went
+      up). The cycle that starts at the appearance acts on the first observation that shows
+      the block, so 0 is the earliest possible.
+
+    Perception steps are timed at the end of their control cycle (the env perceives after the
+    physics step). ``compared`` keeps what the accuracy test compared: at the accurate step, or,
+    if there was none, at the nearest miss (the smallest of max(|dh| / 1 cm, |dl| / 2 cm)).
+
+    Args:
+        t0: s, when the block appeared.
+        block: the timed block (:class:`~neurocog_gym.robot.obstacles.Block`, as placed).
+        raise_tol: m, the raised-node tolerance.
+        n_blocks: blocks placed at the appearance.
+    """
+
+    def __init__(self, t0: float, block, raise_tol: float, n_blocks: int = 1):
+        self.t0 = float(t0)
+        self.block = block
+        self.raise_tol = float(raise_tol)
+        self.n_blocks = int(n_blocks)
+        self.first_nonhomogeneous: float | None = None
+        self.first_object: float | None = None
+        self.accurate: float | None = None
+        self.first_interrupt: float | None = None
+        self.compared: dict | None = None
+        self._miss = math.inf
+
+    def perceived(self, t: float, pipeline, forward_xy) -> None:
+        """After the perception step of a control cycle that ended at ``t`` s.
+
+        Args:
+            t: s, simulated time of the step.
+            pipeline: the env's :class:`~neurocog_gym.perception.pipeline.AttentionPipeline`
+                (its ``net.nodes``, (n, 3) metres, and ``last`` affordances are read).
+            forward_xy: (2,) the heading the pipeline measured lengths along.
+        """
+        from neurocog_gym.bench.perception_scenes import extents, in_region, object_on
+
+        dt = t - self.t0
+        if dt < -1e-9:
+            return
+        dt = max(dt, 0.0)
+        b = self.block
+        aff = pipeline.last
+        if self.first_nonhomogeneous is None and aff is not None:
+            nodes = np.asarray(pipeline.net.nodes, dtype=np.float64).reshape(-1, 3)
+            g = aff.ground_z if math.isfinite(aff.ground_z) else 0.0
+            if (in_region(b, nodes, 0.0) & (nodes[:, 2] > g + self.raise_tol)).any():
+                self.first_nonhomogeneous = dt
+        if self.accurate is not None:
+            return
+        o = object_on(aff, b)
+        if o is None:
+            return
+        if self.first_object is None:
+            self.first_object = dt
+        _, true_length = extents(b, forward_xy)
+        dh, dl = o.height - b.height, o.length - true_length
+        ok = abs(dh) <= ACCURATE_HEIGHT and abs(dl) <= ACCURATE_LENGTH
+        miss = max(abs(dh) / ACCURATE_HEIGHT, abs(dl) / ACCURATE_LENGTH)
+        if ok or miss < self._miss:
+            self._miss = miss
+            self.compared = {
+                "at_s": round(dt, 4),
+                "accurate": bool(ok),
+                "height": round(float(o.height), 5),
+                "length": round(float(o.length), 5),
+                "width": round(float(o.width), 5),
+                "true_height": round(float(b.height), 5),
+                "true_length": round(float(true_length), 5),
+                "n_nodes": int(o.n_nodes),
+            }
+        if ok:
+            self.accurate = dt
+
+    def control(self, t_start: float, interrupted: bool) -> None:
+        """After a control cycle that started at ``t_start`` s.
+
+        Args:
+            t_start: s, simulated time at the start of the cycle.
+            interrupted: the cycle's clipped action had a non-zero interrupt group.
+        """
+        if self.first_interrupt is None and interrupted and t_start >= self.t0 - 1e-9:
+            self.first_interrupt = max(t_start - self.t0, 0.0)
+
+    def result(self) -> dict:
+        """The ``latency`` field of the trial record (s after the appearance; None: never)."""
+        return {
+            "first_nonhomogeneous_s": _num(self.first_nonhomogeneous, 4),
+            "first_object_s": _num(self.first_object, 4),
+            "accurate_s": _num(self.accurate, 4),
+            "first_interrupt_s": _num(self.first_interrupt, 4),
+            "n_blocks": self.n_blocks,
+            "compared": self.compared,
+        }
+
+
+NO_LATENCY = {
+    "first_nonhomogeneous_s": None,
+    "first_object_s": None,
+    "accurate_s": None,
+    "first_interrupt_s": None,
+    "n_blocks": 0,
+    "compared": None,
+}
+"""The ``latency`` of a sudden trial that ended before its block appeared."""
+
+
+def _heading_xy(qpos: np.ndarray) -> np.ndarray:
+    """(2,) unit heading of the torso (its yaw, as the obstacle envs compute it)."""
+    w, x, y, z = (float(v) for v in qpos[3:7])
+    yaw = float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+    return np.array([np.cos(yaw), np.sin(yaw)])
+
+
 def _num(x, digits: int = 6) -> float | None:
     """JSON-ready float rounded to ``digits``: None for None, NaN or infinity."""
     if x is None:
@@ -275,18 +432,28 @@ def _num(x, digits: int = 6) -> float | None:
     return round(x, digits) if math.isfinite(x) else None
 
 
-def make_env(scenario: str, attention: str, max_seconds: float | None, privileged: bool = False):
+def make_env(
+    scenario: str,
+    attention: str,
+    max_seconds: float | None,
+    privileged: bool = False,
+    affordance_source: str | None = None,
+):
     """The scenario's env with the attention setting and the trial time limit.
 
-    ``privileged`` adds the simulator's truth to the observation (``true_blocks``, ``feet``),
-    for the privileged oracle (:class:`neurocog_gym.policies.oracle.OraclePolicy`).
+    ``attention`` picks the topological map (:data:`GNG_OF_ATTENTION`); ``privileged`` adds
+    the simulator's truth to the observation (``true_blocks``, ``feet``), for the privileged
+    oracle (:class:`neurocog_gym.policies.oracle.OraclePolicy`); ``affordance_source`` is the
+    envs' keyword ("points", "map"; None: the env's default).
     """
     import gymnasium as gym
 
     import neurocog_gym  # noqa: F401  (registers the ids)
     from neurocog_gym.perception.pipeline import PipelineParams
 
-    kwargs = {"perception": PipelineParams(gng="ddgng" if attention == "on" else "gng")}
+    kwargs = {"perception": PipelineParams(gng=GNG_OF_ATTENTION[attention])}
+    if affordance_source is not None:
+        kwargs["affordance_source"] = affordance_source
     if max_seconds is not None:
         kwargs["max_episode_steps"] = max(1, int(round(max_seconds / CONTROL_DT)))
     if privileged:
@@ -326,8 +493,10 @@ def run_trial(
         ``aef_mode_steps`` (cycles whose action the AEF policy's fit chose in mode 0 none,
         1 interrupt, 2 provision; None for a policy without a ``mode``), ``perception_ms``
         (``mean``, ``max``, ``gng_mean``, ``affordance_mean`` per control cycle), ``wall_s``
-        and ``similarity`` (:meth:`SimilarityProbe.result`). The caller adds the run's policy
-        and attention.
+        ``similarity`` (:meth:`SimilarityProbe.result`), ``latency`` (sudden trials:
+        :meth:`LatencyProbe.result`, all None if the block never appeared; static: None) and
+        ``perception`` (the env's ``gng`` and ``affordance_source``). The caller adds the
+        run's policy, attention and affordance source.
     """
     from neurocog_gym.policies import start_episode
 
@@ -338,6 +507,9 @@ def run_trial(
     start_episode(policy, env)
     x0 = float(u.data.qpos[0])
     probe = None
+    latency = None
+    sudden = spec.scenario == "sudden"
+    raise_tol = float(u.pipeline.affordance_params.raised_node_tolerance)
     perception, gng_ms, aff_ms = [], [], []
     modes = [0, 0, 0] if hasattr(policy, "mode") else None
     contact_steps, first_touch = 0, None
@@ -346,10 +518,17 @@ def run_trial(
         action = policy(obs)
         if modes is not None:
             modes[int(policy.mode)] += 1
+        t_start, interrupts = float(u.data.time), u.interrupt_cycles
         obs, _, terminated, truncated, info = env.step(action)
         steps += 1
         if info.get("sim_unstable"):
             break
+        if sudden and latency is None and getattr(u, "appeared_at", None) is not None:
+            blocks = u.pool.blocks
+            latency = LatencyProbe(float(u.appeared_at), blocks[0], raise_tol, len(blocks))
+        if latency is not None:
+            latency.control(t_start, u.interrupt_cycles > interrupts)
+            latency.perceived(float(u.data.time), u.pipeline, _heading_xy(u.data.qpos))
         # The pipeline's wall times of this cycle (the env's info may carry the total too).
         timings = u.pipeline.timings
         perception.append(1e3 * float(timings["total"]))
@@ -361,7 +540,6 @@ def run_trial(
                 first_touch = round(float(u.data.time), 4)
         if probe is None and u.pool.blocks:
             appeared = getattr(u, "appeared_at", None)
-            sudden = spec.scenario == "sudden"
             probe = SimilarityProbe(
                 settings, float(appeared) if sudden and appeared is not None else None
             )
@@ -416,6 +594,13 @@ def run_trial(
         },
         "wall_s": round(time.perf_counter() - wall0, 3),
         "similarity": probe.result() if probe is not None else None,
+        "latency": (latency.result() if latency is not None else dict(NO_LATENCY))
+        if sudden
+        else None,
+        "perception": {
+            "gng": u.pipeline.params.gng,
+            "affordance_source": u.pipeline.params.affordance_source,
+        },
     }
 
 
@@ -424,13 +609,20 @@ def run_trial(
 _WORKER: dict = {}
 
 
-def _init_worker(policy: str, attention: str, max_seconds, similarity: SimilaritySettings) -> None:
+def _init_worker(
+    policy: str,
+    attention: str,
+    max_seconds,
+    similarity: SimilaritySettings,
+    affordance_source: str | None = None,
+) -> None:
     """Build the policy once per worker; envs are built on first use, one per scenario."""
     from neurocog_gym.policies import make_policy
 
     _WORKER.clear()
     _WORKER.update(policy=make_policy(policy), attention=attention, max_seconds=max_seconds,
-                   similarity=similarity, envs={})  # fmt: skip
+                   similarity=similarity, affordance_source=affordance_source,
+                   envs={})  # fmt: skip
 
 
 def _init_pool_worker(*initargs) -> None:
@@ -453,8 +645,9 @@ def _worker_run(spec: TrialSpec) -> dict:
     if spec.scenario not in envs:
         privileged = bool(getattr(_WORKER["policy"], "needs_privileged", False))
         envs[spec.scenario] = make_env(
-            spec.scenario, _WORKER["attention"], _WORKER["max_seconds"], privileged
-        )
+            spec.scenario, _WORKER["attention"], _WORKER["max_seconds"], privileged,
+            _WORKER["affordance_source"],
+        )  # fmt: skip
     try:
         return run_trial(envs[spec.scenario], _WORKER["policy"], spec, _WORKER["similarity"])
     except Exception as e:
@@ -659,7 +852,8 @@ def run_benchmark(config: BenchConfig) -> BenchResult:
     done = {(r["scenario"], r["index"]) for r in records}
     todo = [s for s in trial_specs(config) if (s.scenario, s.index) not in done]
     skipped = len(trial_specs(config)) - len(todo)
-    initargs = (policy, config.attention, config.max_seconds, config.similarity)
+    initargs = (policy, config.attention, config.max_seconds, config.similarity,
+                config.affordance_source)  # fmt: skip
     workers = config.workers or default_workers()
     workers = max(1, min(workers, len(todo))) if todo else 0
     used = {"workers": workers}
