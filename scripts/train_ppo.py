@@ -16,13 +16,17 @@ checkpoint (or ``model.zip``) up to ``--total-steps``. Observations are normalis
 ``vecnormalize.pkl`` beside ``model.zip`` and ``ppo_vecnormalize_<steps>_steps.pkl`` beside each
 checkpoint (written before the zip, both atomically), restored on ``--resume``, and loaded by
 ``neurocog_gym.policies.SB3Policy``, so ``neurocog bench --policy OUT/model.zip`` evaluates the
-policy as it was trained. The defaults (small action spread, learning rate 3e-5, 2048-step
-rollouts, ``target_kl`` 0.02) come from short diagnostic trainings on v0; the reasons are in
-``docs/training.md`` (PPO).
+policy as it was trained. ``--obs-mode depth_only`` (or ``depth``) trains end to end from the
+four ToF depth images (the env's ``observation_mode``: a (4, 43, 56) uint8 image key, to which
+``MultiInputPolicy`` gives SB3's NatureCNN; VecNormalize leaves it alone); the bench reads the
+mode off the saved model's observation space. The defaults (small action spread, learning
+rate 3e-5, 2048-step rollouts, ``target_kl`` 0.02) come from short diagnostic trainings on v0;
+the reasons are in ``docs/training.md`` (PPO).
 
     python scripts/train_ppo.py --total-steps 200000 --n-envs 2 --out runs/ppo
     python scripts/train_ppo.py --out runs/ppo --resume            # after a kill
     neurocog bench --policy runs/ppo/model.zip --trials 10
+    python scripts/train_ppo.py --obs-mode depth_only --out runs/ppo_depth   # from depth
 """
 
 from __future__ import annotations
@@ -53,6 +57,10 @@ class Args:
     env_kwargs: str = ""
     """JSON object of keyword arguments for gymnasium.make, e.g. '{"touch_cost": 50}' (the
     training envs only; neurocog bench evaluates on the registered env)."""
+    obs_mode: str = "default"
+    """The env's observation_mode: default (the perception's keys), depth (those plus the ToF
+    depth image) or depth_only (proprioception and the depth image, no attention pipeline:
+    end-to-end learning from depth). neurocog bench builds its envs in the model's mode."""
     n_envs: int = 2
     """Parallel envs."""
     vec: str = "spin"
@@ -144,12 +152,18 @@ def parse_args(argv: list[str] | None = None) -> Args:
         parser.error("--bc-steps must be >= 0 and --bc-epochs >= 1")
     if args.bc_steps and args.resume:
         parser.error("--bc-steps warm-starts a new run: not with --resume")
+    if args.obs_mode not in ("default", "depth", "depth_only"):
+        parser.error(f"--obs-mode must be default, depth or depth_only, got {args.obs_mode!r}")
+    if args.bc_steps and args.obs_mode == "depth_only":
+        parser.error("--bc-steps clones the AEF, which reads the keys depth_only leaves out")
     if args.checkpoint_every < 1 or args.max_minutes < 0 or args.target_kl < 0:
         parser.error("--checkpoint-every must be >= 1, --max-minutes >= 0, --target-kl >= 0")
     try:
-        _env_kwargs(args.env_kwargs)
+        kw = _env_kwargs(args.env_kwargs)
     except ValueError as e:  # json.JSONDecodeError is a ValueError
         parser.error(f"--env-kwargs must be a JSON object of gymnasium.make arguments: {e}")
+    if "observation_mode" in kw:
+        parser.error("give the observation mode as --obs-mode, not in --env-kwargs")
     try:
         _net_arch(args.net_arch)
     except ValueError:
@@ -191,7 +205,10 @@ def _make_vec_env(args: Args):
     cls = {"subproc": SubprocVecEnv, "spin": SpinVecEnv}.get(args.vec, DummyVecEnv)
     if args.n_envs == 1:
         cls = DummyVecEnv
-    make = functools.partial(_make_one, args.env_id, **_env_kwargs(args.env_kwargs))
+    kwargs = _env_kwargs(args.env_kwargs)
+    if args.obs_mode != "default":
+        kwargs["observation_mode"] = args.obs_mode
+    make = functools.partial(_make_one, args.env_id, **kwargs)
     return make_vec_env(make, n_envs=args.n_envs, seed=args.seed, vec_env_cls=cls)
 
 
@@ -215,12 +232,18 @@ def stats_path(model: Path) -> Path:
 
 
 def _box_keys(space) -> list[str] | None:
-    """The Box keys of a Dict observation space (VecNormalize normalises only those)."""
+    """The Box keys of a Dict observation space that are not images (VecNormalize normalises
+    only those; SB3's CNN scales an image by 1/255 itself and wants it raw)."""
     import gymnasium as gym
+    from stable_baselines3.common.preprocessing import is_image_space
 
     if not isinstance(space, gym.spaces.Dict):
         return None
-    return [k for k, s in space.spaces.items() if isinstance(s, gym.spaces.Box)]
+    return [
+        k
+        for k, s in space.spaces.items()
+        if isinstance(s, gym.spaces.Box) and not is_image_space(s)
+    ]
 
 
 def _normalized(env, args: Args, stats: Path | None):
@@ -509,6 +532,7 @@ def train(args: Args) -> dict:
     steps = int(model.num_timesteps) - done_before
     summary = {
         "env_id": args.env_id,
+        "obs_mode": args.obs_mode,
         "n_envs": args.n_envs,
         "vec": args.vec,
         "total_steps": int(model.num_timesteps),

@@ -26,6 +26,9 @@ class SB3Policy:
 
     Attributes:
         obs_normalizer: the loaded ``VecNormalize`` (without its env) or None.
+        env_kwargs: the ``gymnasium.make`` arguments its observations need: ``{}``, or
+            ``{"observation_mode": ...}`` for a model trained on the depth image
+            (:func:`observation_mode_of` its observation space); the bench builds its envs so.
     """
 
     name = "sb3"
@@ -43,6 +46,8 @@ class SB3Policy:
             if not stats.exists():
                 raise FileNotFoundError(f"VecNormalize statistics {stats} do not exist")
         self.obs_normalizer = _load_vecnormalize(stats) if stats is not None else None
+        mode = observation_mode_of(self.model.observation_space)
+        self.env_kwargs = {} if mode == "default" else {"observation_mode": mode}
 
     def __call__(self, obs) -> np.ndarray:
         """Deterministic action of the model."""
@@ -50,6 +55,18 @@ class SB3Policy:
             obs = self.obs_normalizer.normalize_obs(obs)
         action, _ = self.model.predict(obs, deterministic=True)
         return np.asarray(action, dtype=np.float32)
+
+
+def observation_mode_of(space) -> str:
+    """The obstacle envs' ``observation_mode`` whose observations ``space`` describes.
+
+    ``"default"`` without a ``depth`` key; with one, ``"depth"`` if the perception's keys are
+    there too (``objects``), else ``"depth_only"``.
+    """
+    keys = getattr(space, "spaces", {})
+    if "depth" not in keys:
+        return "default"
+    return "depth" if "objects" in keys else "depth_only"
 
 
 def vecnormalize_path(model: str | os.PathLike) -> Path:
