@@ -438,13 +438,16 @@ def make_env(
     max_seconds: float | None,
     privileged: bool = False,
     affordance_source: str | None = None,
+    env_kwargs: dict | None = None,
 ):
     """The scenario's env with the attention setting and the trial time limit.
 
     ``attention`` picks the topological map (:data:`GNG_OF_ATTENTION`); ``privileged`` adds
     the simulator's truth to the observation (``true_blocks``, ``feet``), for the privileged
     oracle (:class:`neurocog_gym.policies.oracle.OraclePolicy`); ``affordance_source`` is the
-    envs' keyword ("points", "map"; None: the env's default).
+    envs' keyword ("points", "map"; None: the env's default); ``env_kwargs`` are further
+    ``gymnasium.make`` arguments a policy needs (``SB3Policy.env_kwargs``: the observation mode
+    of a model trained on the depth image).
     """
     import gymnasium as gym
 
@@ -458,6 +461,7 @@ def make_env(
         kwargs["max_episode_steps"] = max(1, int(round(max_seconds / CONTROL_DT)))
     if privileged:
         kwargs["privileged"] = True
+    kwargs.update(env_kwargs or {})
     return gym.make(ENV_IDS[scenario], **kwargs)
 
 
@@ -646,7 +650,7 @@ def _worker_run(spec: TrialSpec) -> dict:
         privileged = bool(getattr(_WORKER["policy"], "needs_privileged", False))
         envs[spec.scenario] = make_env(
             spec.scenario, _WORKER["attention"], _WORKER["max_seconds"], privileged,
-            _WORKER["affordance_source"],
+            _WORKER["affordance_source"], getattr(_WORKER["policy"], "env_kwargs", None),
         )  # fmt: skip
     try:
         return run_trial(envs[spec.scenario], _WORKER["policy"], spec, _WORKER["similarity"])
