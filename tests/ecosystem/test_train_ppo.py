@@ -234,3 +234,40 @@ def test_behaviour_cloning_fits_the_aef_actions_and_the_returns():
     assert bc["action_mse"] < 0.3 * bc["action_mse_of_zeros"]
     assert bc["loss_last_epoch"] < bc["loss_first_epoch"]
     real.close()
+
+
+def test_obs_mode_arguments_exit_2():
+    r = _run(str(SCRIPT), "--obs-mode", "rgb")
+    assert r.returncode == 2 and "--obs-mode" in r.stderr
+    r = _run(str(SCRIPT), "--obs-mode", "depth_only", "--bc-steps", "64")
+    assert r.returncode == 2 and "--bc-steps" in r.stderr
+    r = _run(str(SCRIPT), "--env-kwargs", '{"observation_mode": "depth"}')
+    assert r.returncode == 2 and "--obs-mode" in r.stderr
+
+
+@pytest.mark.slow
+def test_train_from_depth_and_bench_in_the_models_mode(tmp_path):
+    """--obs-mode depth_only: a CNN on the depth image, left out of VecNormalize; the bench
+    builds its envs in the mode the saved model's observation space asks for."""
+    import pickle
+
+    from neurocog_gym.policies import make_policy
+
+    out = tmp_path / "ppo_depth"
+    r = _run(str(SCRIPT), "--total-steps", "128", "--out", str(out), "--obs-mode", "depth_only",
+             "--no-tensorboard", *TINY)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    s = json.loads((out / "train_summary.json").read_text())
+    assert s["obs_mode"] == "depth_only" and s["total_steps"] == 128
+    stats = pickle.loads((out / "vecnormalize.pkl").read_bytes())
+    assert "depth" not in stats.norm_obs_keys and "joint_pos" in stats.norm_obs_keys
+    policy = make_policy(str(out / "model.zip"))
+    assert policy.env_kwargs == {"observation_mode": "depth_only"}
+    assert type(policy.model.policy.features_extractor.extractors["depth"]).__name__ == "NatureCNN"
+
+    bench = tmp_path / "bench"
+    r = _run("-m", "neurocog_gym.cli", "bench", "--policy", str(out / "model.zip"), "--trials",
+             "1", "--workers", "1", "--max-seconds", "1", "--scenario", "sudden", "--out",
+             str(bench))  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert json.loads((bench / "summary.json").read_text())["sudden"]["trials"] == 1
