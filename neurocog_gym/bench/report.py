@@ -392,7 +392,7 @@ def _latency_order(r: dict) -> tuple:
 def plot_latency(runs: list[Run], path: Path, xmax: float = 1.0) -> Path:
     """Fig. 10 as a timeline: per sudden trial, the §6.2 chain after the block appeared.
 
-    One panel per run (side by side, same time axis). Each row is a trial, sorted by the time
+    One panel per run (three to a row, same time axis). Each row is a trial, sorted by the time
     to an accurate affordance (then to the first non-homogeneous nodes); its line runs from the
     appearance (0) to the end of the trial and is coloured by outcome. Marks: first
     non-homogeneous nodes (o), accurate affordance (◆), first interrupt (▲); an event later than
@@ -406,9 +406,14 @@ def plot_latency(runs: list[Run], path: Path, xmax: float = 1.0) -> Path:
     if not panels:
         raise ValueError("no sudden trial with a latency record")
     n_max = max(len(rows) for _, rows in panels)
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 0.075 * n_max + 1.9),
-                             squeeze=False, sharex=True)  # fmt: skip
-    for ax, (run, rows) in zip(axes[0], panels, strict=True):
+    ncols = min(3, len(panels))
+    nrows = -(-len(panels) // ncols)
+    height = (0.075 * n_max + 1.2) * nrows + 0.7
+    fig, axes = plt.subplots(nrows, ncols, figsize=(5.0 * ncols, height), squeeze=False,
+                             sharex=True)  # fmt: skip
+    for ax in axes.flat[len(panels) :]:
+        ax.set_visible(False)
+    for ax, (run, rows) in zip(axes.flat, panels, strict=False):
         for y, r in enumerate(rows):
             end = (r.get("time") or 0.0) - (r.get("appeared_at") or 0.0)
             ax.hlines(y, 0.0, min(max(end, 0.0), xmax), color=COLOURS[r["outcome"]], lw=2.2,
@@ -436,7 +441,7 @@ def plot_latency(runs: list[Run], path: Path, xmax: float = 1.0) -> Path:
     fig.legend(handles, labels, loc="lower center", ncol=6, fontsize=7)
     fig.suptitle("§6.2 chain per sudden trial (Fig. 10); dashed: the paper's 0.1 and 0.21 s, "
                  "dotted: 0.25 s", fontsize=9)  # fmt: skip
-    fig.tight_layout(rect=(0, 0.06, 1, 0.95))
+    fig.tight_layout(rect=(0, 0.05 / nrows, 1, 1 - 0.05 / nrows))
     io.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
     return path
