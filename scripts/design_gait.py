@@ -118,6 +118,12 @@ class TrotDesign:
     """S2, own touch sensor -> hip extensor (positive: a loaded foot pushes on)."""
     t_kf: float = 0.0
     """S3, own touch sensor -> knee flexor (negative: a loaded knee does not fold)."""
+    t_nf: float = 0.0
+    """S7 and S11, a ring neighbour's touch sensor -> hip flexor (negative, excitatory: a leg
+    swings sooner while the legs beside it on the ring carry load, and waits while one of them
+    is still in the air; Cruse's "a leg does not lift before its neighbour is down")."""
+    t_ne: float = 0.0
+    """S8 and S12, a ring neighbour's touch sensor -> hip extensor."""
 
 
 def build(p: TrotDesign) -> Gait:
@@ -131,6 +137,8 @@ def build(p: TrotDesign) -> Gait:
     for k, v in c.items():
         genes[k] = v
     genes[65:68] = p.t_hf, p.t_he, p.t_kf  # S1, S2, S3: the load rule (body v2)
+    genes[71:73] = p.t_nf, p.t_ne  # S7, S8: touch of ring leg l -> hip neurons of leg l + 3
+    genes[75:77] = p.t_nf, p.t_ne  # S11, S12: ... of leg l + 1 (both ring neighbours alike)
     front_posture = [p.ph, p.pk]
     hind_posture = [p.phh, p.pkh]
     return Gait(

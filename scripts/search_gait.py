@@ -15,7 +15,8 @@ Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers mult
   (in the air while the CPG stands it, or down while it swings); with ``--swing S``: 30
   (``--swing_weight``) per second
   by which the median swing is shorter than S; with ``--hip_height H``: 100 per metre by which
-  the mean hip height falls short of H (all three used for body v2, off by default).
+  the mean hip height falls short of H (all three used for body v2, off by default); with
+  ``--perturb K`` every other seed walks with every K-th front swing a high step.
 
 Body v1's numbers came from four chained runs of this search (about 1,100 candidates): from the
 v0 numbers scaled to the longer legs (theta_dd_MAX x 0.55, tau_f x 1.3, knee synapses x 0.7,
@@ -43,7 +44,8 @@ from design_gait import TrotDesign, build  # noqa: E402
 from neurocog_gym.envs.walk import WalkEnv  # noqa: E402
 
 KEYS = ("hg", "hgh", "kf", "kfh", "keh", "tf", "am", "ph", "pk", "phh", "pkh", "kr")
-GENE_KEYS = ("ke", "c1", "ring", "ring2", "kk", "kk6", "w", "wb", "t_hf", "t_he", "t_kf")
+GENE_KEYS = ("ke", "c1", "ring", "ring2", "kk", "kk6", "w", "wb", "t_hf", "t_he", "t_kf", "t_nf",
+             "t_ne")
 """With ``--genes``: the CPG's synapse weights too (design_gait.py's docstring names them)."""
 
 
@@ -78,6 +80,9 @@ class Args:
     """Wanted walking speed, m/s."""
     swing_weight: float = 30.0
     """Cost per second by which the median swing is shorter than ``--swing``."""
+    perturb: int = 0
+    """k > 0: every other seed walks with every k-th front swing a high step (``walk_stats``),
+    so a design that falls after a step over a block costs as a fall does (0: not used)."""
     hip_height: float = 0.0
     """Lowest wanted mean hip height while walking, m; 100 per metre below it (0: not used)."""
     cma: bool = False
@@ -87,15 +92,34 @@ class Args:
     """Processes evaluating a CMA-ES generation."""
 
 
-def walk_stats(design: TrotDesign, seed: int, seconds: float) -> dict:
-    """Walk the design's gait; fall, speed, clearances, drift, one-side share, short contacts."""
+def walk_stats(design: TrotDesign, seed: int, seconds: float, perturb: int = 0) -> dict:
+    """Walk the design's gait; fall, speed, clearances, drift, one-side share, short contacts.
+
+    ``perturb`` k > 0: from 2 s on, every k-th swing of each front leg is a high step (knee
+    interrupt +1 until the sole is 10 cm up, as a step over a block lifts it), the other swings
+    are the CPG's; the statistics then describe the perturbed walk.
+    """
     env = WalkEnv(gait=build(design))
     env.reset(seed=seed)
     r = env.robot
     radius = env.model.geom_size[r.foot_geom, 0]
     xs, feet, touch, cpg, hips, fell = [], [], [], [], [], False
+    action = np.zeros(15)
+    was, count, high = np.zeros(4, bool), np.zeros(4, int), np.zeros(4, bool)
     for _ in range(int(seconds / env.dt)):
-        _, _, term, trunc, _ = env.step(np.zeros(15))
+        if perturb:
+            action[:] = 0.0
+            now = env.generator.swinging
+            for leg in (0, 1):
+                if now[leg] and not was[leg] and env.data.time > 2.0:
+                    count[leg] += 1
+                    high[leg] = count[leg] % perturb == 0
+                sole = env.data.site_xpos[r.foot_site[leg], 2] - np.ravel(radius)[0]
+                high[leg] &= bool(now[leg]) and sole < 0.10
+                if high[leg]:
+                    action[3 * leg + 2] = 1.0
+            was = now.copy()
+        _, _, term, trunc, _ = env.step(action)
         cpg.append(env.generator.swinging.copy())
         hips.append(env.data.xpos[r.thigh_body, 2].mean())
         xs.append(env.data.qpos[:2].copy())
@@ -157,11 +181,12 @@ def cost(
     hip_height: float = 0.0,
     speed: float = 0.5,
     swing_weight: float = 30.0,
+    perturb: int = 0,
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
     for seed in range(seeds):
-        s = walk_stats(design, seed, seconds)
+        s = walk_stats(design, seed, seconds, perturb if seed % 2 else 0)
         if s["fell"]:
             c += 100.0 + 10.0 * (seconds - s["t"])
             if "speed" not in s:
@@ -230,7 +255,7 @@ def main(argv: list[str] | None = None) -> None:
     rng = np.random.default_rng(args.rng)
     extra = {"mismatch": args.mismatch, "swing": args.swing, "speed_weight": args.speed_weight,
              "hip_height": args.hip_height, "speed": args.speed,
-             "swing_weight": args.swing_weight}  # fmt: skip
+             "swing_weight": args.swing_weight, "perturb": args.perturb}  # fmt: skip
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
