@@ -5,7 +5,8 @@ out: the upper-bound row of the benchmark, not the paper's controller. It needs 
 env's privileged observation keys (``gymnasium.make(id, privileged=True)``): ``true_blocks``
 (the simulator's block boxes) and ``feet`` (the soles' positions), besides the ordinary
 ``touch``, ``foothold`` (the effectivity's predicted footholds) and ``cpg`` (the rhythm the
-env's CPG is in: a leg's CPG swing is its knee flexor's output above its extensor's). Nothing
+env's CPG is in: a leg's CPG swing is its knee or its hip flexor's output above its
+extensor's). Nothing
 else of the env is read; the decision is the policy's.
 
 A step-over starts only where the trot gives it room: at a leg's CPG swing onset (within
@@ -134,9 +135,11 @@ class OraclePolicy:
         footholds = np.asarray(obs["foothold"], dtype=np.float64).reshape(4, 3)
         touch = np.asarray(obs["touch"], dtype=np.float64)
         y = np.asarray(obs["cpg"], dtype=np.float64).reshape(4, 6)
-        # A leg's CPG swing: its knee flexor above its extensor (the foot rises; the hip flexor
-        # takes over about 0.06 s later, generator.swinging).
-        cpg_swing = y[:, 2] > y[:, 3]
+        # A leg's CPG swing: its knee flexor above its extensor (the foot rises) or its hip
+        # flexor above its extensor (it protracts: generator.swinging). The knee leads by about
+        # 0.06 s and extends again in the swing's second half, where a sudden block appears, so
+        # the knee alone never saw those blocks (kbP, 20 sudden trials: falls 13 -> 7).
+        cpg_swing = (y[:, 2] > y[:, 3]) | (y[:, 0] > y[:, 1])
         self.swing_t = np.where(cpg_swing, self.swing_t + p.dt, np.inf)
         self.swing_t[cpg_swing & ~np.isfinite(self.swing_t)] = 0.0
         action = np.zeros(ACTION_DIM, dtype=np.float32)

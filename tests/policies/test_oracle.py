@@ -58,6 +58,20 @@ def test_a_swing_that_meets_a_block_from_its_cpg_swing_onset_lifts_that_foot():
     assert policy.state[0] == 4  # APPROACH: no interrupt until the sole is near the face
 
 
+def test_a_block_met_in_the_second_half_of_a_swing_is_answered():
+    # Late in the swing the CPG's knee extends again (its extensor leads) while the hip still
+    # protracts: the swing is on, and a block in its path makes the foot approach and drop.
+    policy = OraclePolicy()
+    obs = _staged_block_ahead_of_fl()
+    y = np.zeros((4, 6), np.float32)
+    y[:, 1] = y[:, 3] = 1.0  # every leg: hip and knee extensors lead (stance) ...
+    y[0, 0], y[0, 1] = 1.0, 0.0  # ... but FL's hip flexor leads: FL protracts, its knee extends
+    obs["cpg"] = y.ravel()
+    policy.swing_t[0] = 0.1  # 0.1 s into the swing: not fresh
+    policy(obs)
+    assert policy.state[0] == 4  # APPROACH
+
+
 def test_a_foot_the_cpg_holds_in_stance_is_never_lifted():
     # The same block and foot, but the CPG has FL in stance (the foot only lost its load):
     # lifting it would take a support leg away (docs/oracle_notes.md), so nothing acts.
