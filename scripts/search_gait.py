@@ -83,6 +83,9 @@ class Args:
     perturb: int = 0
     """k > 0: every other seed walks with every k-th front swing a high step (``walk_stats``),
     so a design that falls after a step over a block costs as a fall does (0: not used)."""
+    kinds: str = "h"
+    """The disturbances of ``--perturb``, in turn: h high step, d shortened step, o step over
+    (``walk_stats``)."""
     hip_height: float = 0.0
     """Lowest wanted mean hip height while walking, m; 100 per metre below it (0: not used)."""
     cma: bool = False
@@ -92,32 +95,67 @@ class Args:
     """Processes evaluating a CMA-ES generation."""
 
 
-def walk_stats(design: TrotDesign, seed: int, seconds: float, perturb: int = 0) -> dict:
+def walk_stats(
+    design: TrotDesign, seed: int, seconds: float, perturb: int = 0, kinds: str = "h"
+) -> dict:
     """Walk the design's gait; fall, speed, clearances, drift, one-side share, short contacts.
 
-    ``perturb`` k > 0: from 2 s on, every k-th swing of each front leg is a high step (knee
-    interrupt +1 until the sole is 10 cm up, as a step over a block lifts it), the other swings
-    are the CPG's; the statistics then describe the perturbed walk.
+    ``perturb`` k > 0: from 2 s on, every k-th swing of each front leg is disturbed the way a
+    controller answering a block disturbs it, the kinds taken in turn from ``kinds``: ``h`` a
+    high step (knee interrupt +1 until the sole is 10 cm up, then the CPG's swing), ``d`` a
+    shortened step (from 0.1 s into the swing hip +1, knee -1 until the foot is down), ``o`` a
+    step over (the high step, then hip -1 for 0.08 s, then knee -1 until the foot is down). The
+    other swings are the CPG's; the statistics then describe the disturbed walk.
     """
     env = WalkEnv(gait=build(design))
     env.reset(seed=seed)
     r = env.robot
-    radius = env.model.geom_size[r.foot_geom, 0]
+    radius = float(np.ravel(env.model.geom_size[r.foot_geom, 0])[0])
     xs, feet, touch, cpg, hips, fell = [], [], [], [], [], False
     action = np.zeros(15)
-    was, count, high = np.zeros(4, bool), np.zeros(4, int), np.zeros(4, bool)
+    was, count = np.zeros(4, bool), np.zeros(4, int)
+    kind, phase, since = [""] * 4, np.zeros(4, int), np.zeros(4)
     for _ in range(int(seconds / env.dt)):
         if perturb:
             action[:] = 0.0
             now = env.generator.swinging
+            down = env.touch() > 0.05
             for leg in (0, 1):
+                sole = env.data.site_xpos[r.foot_site[leg], 2] - radius
                 if now[leg] and not was[leg] and env.data.time > 2.0:
                     count[leg] += 1
-                    high[leg] = count[leg] % perturb == 0
-                sole = env.data.site_xpos[r.foot_site[leg], 2] - np.ravel(radius)[0]
-                high[leg] &= bool(now[leg]) and sole < 0.10
-                if high[leg]:
-                    action[3 * leg + 2] = 1.0
+                    if count[leg] % perturb == 0:
+                        kind[leg] = kinds[(count[leg] // perturb) % len(kinds)]
+                        phase[leg], since[leg] = 0, 0.0
+                since[leg] += env.dt
+                k = kind[leg]
+                j = 3 * leg
+                if k == "h":
+                    if now[leg] and sole < 0.10:
+                        action[j + 2] = 1.0
+                    else:
+                        kind[leg] = ""
+                elif k == "d":
+                    if since[leg] >= 0.1:
+                        if down[leg] and since[leg] > 0.12:
+                            kind[leg] = ""
+                        else:
+                            action[j + 1], action[j + 2] = 1.0, -1.0
+                elif k == "o":
+                    if phase[leg] == 0:
+                        action[j + 2] = 1.0
+                        if sole >= 0.10:
+                            phase[leg], since[leg] = 1, 0.0
+                    elif phase[leg] == 1:
+                        action[j + 1], action[j + 2] = -1.0, 1.0 if sole < 0.09 else 0.5
+                        if since[leg] >= 0.08:
+                            phase[leg] = 2
+                    else:
+                        action[j + 2] = -1.0
+                        if down[leg]:
+                            kind[leg] = ""
+                    if since[leg] > 0.6:
+                        kind[leg] = ""
             was = now.copy()
         _, _, term, trunc, _ = env.step(action)
         cpg.append(env.generator.swinging.copy())
@@ -182,11 +220,12 @@ def cost(
     speed: float = 0.5,
     swing_weight: float = 30.0,
     perturb: int = 0,
+    kinds: str = "h",
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
     for seed in range(seeds):
-        s = walk_stats(design, seed, seconds, perturb if seed % 2 else 0)
+        s = walk_stats(design, seed, seconds, perturb if seed % 2 else 0, kinds)
         if s["fell"]:
             c += 100.0 + 10.0 * (seconds - s["t"])
             if "speed" not in s:
@@ -255,7 +294,8 @@ def main(argv: list[str] | None = None) -> None:
     rng = np.random.default_rng(args.rng)
     extra = {"mismatch": args.mismatch, "swing": args.swing, "speed_weight": args.speed_weight,
              "hip_height": args.hip_height, "speed": args.speed,
-             "swing_weight": args.swing_weight, "perturb": args.perturb}  # fmt: skip
+             "swing_weight": args.swing_weight, "perturb": args.perturb,
+             "kinds": args.kinds}  # fmt: skip
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
