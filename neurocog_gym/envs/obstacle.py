@@ -61,7 +61,8 @@ The episode terminates when the robot passes (or falls); the time limit truncate
   ``MultiInputPolicy`` puts a CNN on it and MLPs on the rest. The attention pipeline runs.
 * ``"depth_only"``: Walk's proprioceptive keys, ``feet``, ``leg_joints`` and ``depth``
   (``true_blocks`` with ``privileged``): the attention pipeline does not run (no DD-GNG, no
-  affordances, about 40 % of a step saved) and the keys built from it are left out
+  affordances, no map warm-up at reset: about half of a step) and the keys built from it are
+  left out
   (``objects``, ``objects_mask``, ``aef_input``, ``interrupt_direction``, ``foothold``,
   ``foothold_safe``, ``path_meets_block``, ``block_met``, ``remembered_blocks``). The
   effectivity still predicts the footholds (against no perceived box), where the sudden block
