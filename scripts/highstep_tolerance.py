@@ -74,9 +74,10 @@ def main(argv: list[str] | None = None) -> None:
         fell, t = walk(seed, legs, a.every, a.knee, a.hip, a.height, a.seconds)
         falls += fell
         tops += t
+    top = float(np.median(tops)) * 100 if tops else 0.0
     print(f"legs {a.legs}, every {a.every}th swing, knee {a.knee}, hip {a.hip}, to "
           f"{a.height * 100:.0f} cm: falls {falls} of {a.seeds} walks of {a.seconds:.0f} s, "
-          f"{len(tops)} high steps, median top {np.median(tops) * 100 if tops else 0:.1f} cm")  # fmt: skip
+          f"{len(tops)} high steps, median top {top:.1f} cm")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -44,8 +44,10 @@ from design_gait import TrotDesign, build  # noqa: E402
 from neurocog_gym.envs.walk import WalkEnv  # noqa: E402
 
 KEYS = ("hg", "hgh", "kf", "kfh", "keh", "tf", "am", "ph", "pk", "phh", "pkh", "kr")
-GENE_KEYS = ("ke", "c1", "ring", "ring2", "kk", "kk6", "w", "wb", "t_hf", "t_he", "t_kf", "t_nf",
-             "t_ne")
+GENE_KEYS = (
+    *("ke", "c1", "ring", "ring2", "kk", "kk6", "w", "wb"),
+    *("t_hf", "t_he", "t_kf", "t_nf", "t_ne"),
+)
 """With ``--genes``: the CPG's synapse weights too (design_gait.py's docstring names them)."""
 
 

@@ -220,7 +220,8 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
     # of 10 cm less the sole radius) while the foot crossed the block.
     lateral = max((abs(v) for v in over), default=np.inf)
     return {"first_touch": first, "past_far_face_m": round(beyond, 3), "upright": upright,
-            "later": sorted(others), "t_fall": t_fall, "lateral_m": round(lateral, 3), "over": bool(lateral < 0.10 - R_FOOT)}  # fmt: skip
+            "later": sorted(others), "t_fall": t_fall, "lateral_m": round(lateral, 3),
+            "over": bool(lateral < 0.10 - R_FOOT)}  # fmt: skip
 
 
 def _prepare_body(a: Args) -> None:

@@ -13,8 +13,9 @@ from neurocog_gym.envs.batch import make_batch_vector
 from neurocog_gym.envs.vector import make_spin_vector
 
 VECTOR_BACKENDS = ("spin", "threads")
-"""``vector_backend`` values of the vector entry points: :class:`neurocog_gym.envs.vector.SpinVectorEnv` (the default: on
-2 cores it steps 2 and 8 envs 1.5-2 x faster than the threads do, ``docs/performance.md``) or
+"""``vector_backend`` values of the vector entry points:
+:class:`neurocog_gym.envs.vector.SpinVectorEnv` (the default: on 2 cores it steps 2 and 8 envs
+1.5-2 x faster than the threads do, ``docs/performance.md``) or
 :class:`neurocog_gym.envs.batch.BatchVectorEnv`."""
 
 
@@ -23,8 +24,8 @@ def make_vector(
 ) -> VectorEnv:
     """The vector env ``gymnasium.make_vec(env_id, num_envs)`` builds for our ids.
 
-    ``vector_backend="spin"`` (default): :func:`neurocog_gym.envs.vector.make_spin_vector`; ``"threads"``:
-    :func:`neurocog_gym.envs.batch.make_batch_vector`. Both step the sub-envs of
+    ``vector_backend="spin"`` (default): :func:`neurocog_gym.envs.vector.make_spin_vector`;
+    ``"threads"``: :func:`neurocog_gym.envs.batch.make_batch_vector`. Both step the sub-envs of
     ``vectorization_mode="sync"`` with its results, bit for bit.
     """
     if vector_backend == "spin":
