@@ -45,7 +45,9 @@ from neurocog_gym.perception.similarity import box_surface_reference, surface_ma
 from neurocog_gym.robot.obstacles import Block, ObstaclePool
 from neurocog_gym.robot.tof import ToFArray, ToFParams
 
-DOC = Path(__file__).resolve().parent.parent / "docs" / "generated" / "benchmarks_perception.md"
+DOC = Path(__file__).resolve().parents[2] / "docs" / "generated" / "benchmarks_perception.md"
+"""The perception page of the checkout (the repository's docs/, two levels above this package
+module: bench/ -> neurocog_gym/ -> the repository)."""
 DOC_TITLE = "## Perception in the loop: Fig. 9, attention timing, similarity, accuracy"
 
 

@@ -110,3 +110,13 @@ def test_scripts_run_end_to_end(tmp_path, script, args):
     assert out.returncode == 0, out.stderr[-2000:]
     if "--out" in extra:
         assert (tmp_path / "x.png").stat().st_size > 10_000
+
+
+def test_the_perception_page_is_the_checkouts_docs_page():
+    # The scripts write their sections into docs/generated/ of this checkout (once, after a
+    # move of this module, they went to neurocog_gym/docs/ instead, and the page went stale).
+    from neurocog_gym.bench import perception_scenes
+
+    repo = Path(__file__).resolve().parents[2]
+    assert perception_scenes.DOC == repo / "docs" / "generated" / "benchmarks_perception.md"
+    assert perception_scenes.DOC.is_file()
