@@ -20,13 +20,13 @@ far face is still ahead of the sole. If it does:
 
 * **step over**, at the swing's onset and when the far face is at most ``max_over`` ahead of
   the sole: *lift* with the lift interrupt (hip ``lift_hip``, knee +1: the foot rises about
-  where it is) until the sole is ``clearance`` above the top, then *carry* (hip -1, knee
-  ``carry_knee``; the knee folds fully whenever the sole sinks towards the top) until the sole
-  is ``beyond`` past the far face, then release: the CPG puts the foot down beyond the block.
-  A step-over lasts longer than the CPG's swing; once the CPG has put this leg into stance, the
-  same-side leg (FL-HL, FR-HR) is *held down* while its own CPG swing would lift it (hip
-  ``hold_hip``, knee ``hold_knee``), so that the robot stands on three feet until the stepping
-  foot lands;
+  where it is) until the sole is ``clearance`` above the top, then *carry* (hip -1, the knee
+  entry ``carry_knee`` plus ``carry_gain`` per metre the sole is below ``clearance`` above the
+  top) until the sole is ``beyond`` past the far face, then *land* (hip ``land_hip``, knee
+  ``land_knee``) until the foot is down. A step-over lasts longer than the CPG's swing; once
+  the CPG has put this leg into stance, every other leg whose CPG swing would lift it is *held
+  down* (hip ``hold_hip``, knee ``hold_knee``), so that the robot stands on three feet until
+  the stepping foot lands;
 * **shorten** (drop), otherwise (the block is too far to clear, or the swing is already under
   way, as a sudden block's is): the swing goes on until the sole is ``drop_gap`` from the near
   face, then hip +1, knee -1 until the foot is down, with the walking provision s_SAG =
@@ -81,15 +81,13 @@ class OracleParams:
     forward over the landed leg: 0 of 20, 14 falls)."""
     land_knee: float = -1.0
     """Knee entry meanwhile (stretching the leg towards the ground)."""
-    step_sag: float = 0.0
-    """s_SAG while a leg steps over (0: the trot goes on; -0.5: it marches in place)."""
     drop_gap: float = 0.04
     """A foot that cannot step over drops once its sole is this close to the near face, m."""
     fresh_swing: float = 0.03
     """A step-over starts only this soon after the leg's CPG swing onset, s (later, the foot
     drops)."""
     hold_hip: float = 0.3
-    """Hip entry holding the same-side leg down while a step-over outlasts the CPG swing
+    """Hip entry holding a leg the CPG would lift down while a step-over outlasts the CPG swing
     (``scripts/stepover_probe.py --hold_hip 0.5 --hold_knee -1``: 5 of 9 clean FL step-overs
     against 0 of 9 with the knee alone, which fell every time)."""
     hold_knee: float = -0.5
@@ -119,7 +117,6 @@ class OraclePolicy:
         self.state = np.zeros(4, dtype=np.int64)
         self.held = np.zeros(4)
         self.block = np.full(4, -1, dtype=np.int64)
-        self.air = np.zeros(4)
         self.swing_t = np.full(4, np.inf)
 
     def __call__(self, obs) -> np.ndarray:
@@ -146,7 +143,6 @@ class OraclePolicy:
         for leg in range(4):
             sole = feet[leg, 2] - p.foot_radius
             down = touch[leg] >= p.touch_off
-            self.air[leg] = 0.0 if down else self.air[leg] + p.dt
             st = self.state[leg]
             if st != IDLE:
                 self.held[leg] += p.dt
@@ -209,8 +205,6 @@ class OraclePolicy:
                     action[3 * other + 2] = p.hold_knee
         if (self.state == DROP).any():
             action[12] = p.brake_sag
-        elif stepping.any() and p.step_sag:
-            action[12] = p.step_sag
         return action
 
     def _block_met(
