@@ -224,25 +224,20 @@ class ObstacleEnv(QuadrupedEnv):
         if self._with_depth:
             shape = (self._n_sensors, DEPTH_HEIGHT, DEPTH_WIDTH)
             s["depth"] = spaces.Box(0, 255, shape, np.uint8)
-        if not self._perceive:
-            s["feet"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
-            s["leg_joints"] = spaces.Box(-np.inf, np.inf, (4 * 3 * 3,), f32)
-            if self.privileged:
-                nb = len(BLOCK_FIELDS)
-                s["true_blocks"] = spaces.Box(-np.inf, np.inf, (TRUE_BLOCK_SLOTS * nb,), f32)
-            return s
-        # Every key 1-D (SB3's check_env and its MultiInputPolicy take vectors or images): the
-        # tables are flattened row by row; ``obs[k].reshape(N_OBJECTS, len(OBJECT_FIELDS))``.
-        s["objects"] = spaces.Box(-np.inf, np.inf, (N_OBJECTS * len(OBJECT_FIELDS),), f32)
-        s["objects_mask"] = spaces.Box(0.0, 1.0, (N_OBJECTS,), f32)
         nb = len(BLOCK_FIELDS)
-        s["aef_input"] = spaces.Box(-np.inf, np.inf, (AEF_INPUTS,), f32)
-        s["interrupt_direction"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
-        s["foothold"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
-        s["foothold_safe"] = spaces.MultiBinary(4)
-        s["path_meets_block"] = spaces.Box(0.0, 1.0, (4,), f32)
-        s["block_met"] = spaces.Box(-1.0, MEMORY_SLOTS - 1, (4,), f32)
-        s["remembered_blocks"] = spaces.Box(-np.inf, np.inf, (MEMORY_SLOTS * nb,), f32)
+        if self._perceive:
+            # Every key 1-D (SB3's check_env and its MultiInputPolicy take vectors or images):
+            # the tables are flattened row by row, e.g.
+            # ``obs["objects"].reshape(N_OBJECTS, len(OBJECT_FIELDS))``.
+            s["objects"] = spaces.Box(-np.inf, np.inf, (N_OBJECTS * len(OBJECT_FIELDS),), f32)
+            s["objects_mask"] = spaces.Box(0.0, 1.0, (N_OBJECTS,), f32)
+            s["aef_input"] = spaces.Box(-np.inf, np.inf, (AEF_INPUTS,), f32)
+            s["interrupt_direction"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
+            s["foothold"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
+            s["foothold_safe"] = spaces.MultiBinary(4)
+            s["path_meets_block"] = spaces.Box(0.0, 1.0, (4,), f32)
+            s["block_met"] = spaces.Box(-1.0, MEMORY_SLOTS - 1, (4,), f32)
+            s["remembered_blocks"] = spaces.Box(-np.inf, np.inf, (MEMORY_SLOTS * nb,), f32)
         s["feet"] = spaces.Box(-np.inf, np.inf, (4 * 3,), f32)
         s["leg_joints"] = spaces.Box(-np.inf, np.inf, (4 * 3 * 3,), f32)
         if self.privileged:
