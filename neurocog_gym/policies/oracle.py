@@ -89,7 +89,9 @@ class OracleParams:
     hold_hip: float = 0.3
     """Hip entry holding a leg the CPG would lift down while a step-over outlasts the CPG swing
     (``scripts/stepover_probe.py --hold_hip 0.5 --hold_knee -1``: 5 of 9 clean FL step-overs
-    against 0 of 9 with the knee alone, which fell every time)."""
+    against 0 of 9 with the knee alone, which fell every time; in the env hip 0.5 / knee -1
+    stretched the held legs and pushed the body up 3 cm, so the hold is lighter here:
+    docs/oracle_notes.md)."""
     hold_knee: float = -0.5
     """Knee entry of that hold (the leg stretched: the foot stays down)."""
     max_hold: float = 0.45
