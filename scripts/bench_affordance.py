@@ -1,6 +1,18 @@
 """Benchmark: affordance detection time per call (§7.2: ~0.136 ms), at 150 / 300 / 500 nodes.
 
-Graphs are GNG-like meshes of a synthetic floor with a 20 × 20 × 7 cm block
+Two tables. **Map mode on DD-GNG graphs** (issue 23: "detection ≤ 0.136 ms at 300 nodes in
+"map" mode"): the graphs are those a DD-GNG pipeline in "map" mode has learned on floor + box
++ wall scenes (``perception_scenes.box_wall_scene``, series 0, the scenes of
+``scripts/bench_affordance_map.py``): the wall alone for ``WARMUP_CYCLES`` learning cycles on
+one frame (``AttentionPipeline.warm_up``), then the box appears and the pipeline runs 0.5 s at
+the sensor rate, attention loop closed. Table 2's k holds such a net at 80–140 nodes; to reach
+the 300 of §7.2 the utility test is relaxed (``k = 1e12``, the net held at ``max_nodes`` = 300,
+as ``scripts/bench_gng.py`` does for its larger nets). Timed on the final graph, calls
+interleaved across scenes: ``AttentionPipeline.detect`` (the affordance half of a map-mode
+step: ``detect_affordances`` and the map-mode object steps, exactly what ``step`` runs per
+frame after its learning cycle) and ``detect_affordances`` alone.
+
+**Synthetic graphs.** Graphs are GNG-like meshes of a synthetic floor with a 20 × 20 × 7 cm block
 (``synthetic_scene_graph``: jittered lattice, a random diagonal in 70 % of the quads, the rest
 left as quads for the detector to close; ~2.6 edges per node). Several graphs per size (different
 seeds); calls are interleaved across sizes and graphs so that load from other processes spreads
@@ -13,6 +25,7 @@ evenly. Reports medians (and p10/p90) of the wall time of
 Writes a markdown table (with command, machine and load) to ``--out``.
 
     .venv/bin/python scripts/bench_affordance.py [--sizes 150 300 500] [--repeats 3000]
+        [--map-scenes 5] [--map-repeats 3000]
 """
 
 from __future__ import annotations
@@ -35,6 +48,8 @@ from neurocog_gym.perception.affordance import (
     detect_affordances,
     synthetic_scene_graph,
 )
+from neurocog_gym.perception.gng import DDGNGParams
+from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
 
 TARGET_US = 136.0
 """§7.2: "10 times faster than the 1.36 ms of [63]"."""
@@ -54,11 +69,21 @@ Python wrapper from ~45 to ~20 µs). No gain: `error_model="numpy"` with fastmat
 """
 
 
+WARMUP_CYCLES = 1500
+"""Learning cycles on the wall-only frame before the box appears (the net fills to its cap)."""
+MAP_K = 1e12
+"""k of the map-mode graphs: the utility test relaxed so that the net reaches 300 nodes."""
+MAP_SENSE = 0.5
+"""s of sensing after the box appears (the accuracy protocol's ``--sense``)."""
+
+
 @dataclass
 class Args:
     sizes: list[int] = field(default_factory=lambda: [150, 300, 500])
     repeats: int = 3000
     graphs: int = 5
+    map_scenes: int = 5
+    map_repeats: int = 3000
     out: Path = Path("docs/generated/benchmarks_affordance.md")
 
 
@@ -67,11 +92,127 @@ def parse(argv: list[str] | None = None) -> Args:
     p.add_argument("--sizes", type=int, nargs="+", default=[150, 300, 500], help="node counts")
     p.add_argument("--repeats", type=int, default=3000, help="timed calls per size")
     p.add_argument("--graphs", type=int, default=5, help="graphs (seeds) per size")
+    p.add_argument(
+        "--map-scenes",
+        type=int,
+        default=5,
+        help="floor + box + wall scenes of the map table (0: none)",
+    )
+    p.add_argument("--map-repeats", type=int, default=3000, help="timed calls of the map table")
     p.add_argument("--out", type=Path, default=Path("docs/generated/benchmarks_affordance.md"))
     a = p.parse_args(argv)
     if a.repeats < 1 or a.graphs < 1 or min(a.sizes) < 10:
         p.error("need --repeats >= 1, --graphs >= 1 and sizes >= 10")
-    return Args(sizes=a.sizes, repeats=a.repeats, graphs=a.graphs, out=a.out)
+    if a.map_scenes < 0 or a.map_repeats < 1:
+        p.error("need --map-scenes >= 0 and --map-repeats >= 1")
+    return Args(
+        sizes=a.sizes, repeats=a.repeats, graphs=a.graphs, map_scenes=a.map_scenes,
+        map_repeats=a.map_repeats, out=a.out,
+    )  # fmt: skip
+
+
+@dataclass
+class MapGraph:
+    """A map-mode pipeline after a floor + box + wall scene, its graph frozen for timing."""
+
+    pipe: AttentionPipeline
+    origin: np.ndarray
+    """(3,) metres: the sensors' mean position (the pipeline's ``sensor_origin``)."""
+    forward: np.ndarray
+    """(3,) the robot's heading."""
+
+
+def map_graphs(n_scenes: int, seed: int = 0) -> list[MapGraph]:
+    """DD-GNG map-mode pipelines on scenes 0..n_scenes-1 of the box + wall series ``seed``."""
+    from neurocog_gym.bench.perception_scenes import StaticScene, box_wall_scene
+    from neurocog_gym.robot.tof import ToFParams
+
+    scene = StaticScene(ToFParams.at_scale(0.25, backend="numba"), seed=seed)
+    out = []
+    try:
+        for i in range(n_scenes):
+            sc = box_wall_scene(scene, seed, i)
+            scene.sensors.reset(seed=sc.tof_seed)
+            pipe = AttentionPipeline(
+                seed=sc.seed,
+                params=PipelineParams(gng="ddgng", affordance_source="map"),
+                gng_params=DDGNGParams(k=MAP_K),
+            )
+            scene.place([sc.wall])
+            scene.data.time = 0.0
+            f = scene.sensors.sense(scene.data)
+            pipe.warm_up(f.points, f.origins.mean(axis=0), WARMUP_CYCLES, scene.forward)
+            scene.place([sc.box, sc.wall])
+            scene.run(pipe, MAP_SENSE, 0.0)
+            origin = scene.last_frame.origins.mean(axis=0)
+            out.append(MapGraph(pipe, np.ascontiguousarray(origin), scene.forward.copy()))
+    finally:
+        scene.close()
+    return out
+
+
+def us(xs: list[int], q: float) -> float:
+    """The q-th percentile of nanosecond times, in µs."""
+    return float(np.percentile(np.asarray(xs) / 1e3, q))
+
+
+def map_table(args: Args) -> list[str]:
+    """The map-mode table: ``AttentionPipeline.detect`` on DD-GNG graphs of ~300 nodes."""
+    graphs = map_graphs(args.map_scenes)
+    ap = graphs[0].pipe.affordance_params
+    for g in graphs:  # compile, and check that detect repeats the step's last result
+        again = g.pipe.detect(g.origin, g.forward)
+        assert [o.kind for o in again.objects] == [o.kind for o in g.pipe.last.objects]
+    per_graph = max(1, args.map_repeats // len(graphs))
+    t_pipe, t_det = [], []
+    clock = time.perf_counter_ns
+    load0 = os.getloadavg()
+    t_start = time.perf_counter()
+    for _ in range(per_graph):
+        for g in graphs:
+            nodes, edges = g.pipe.net.nodes, g.pipe.net.edges
+            t0 = clock()
+            g.pipe.detect(g.origin, g.forward)
+            t1 = clock()
+            detect_affordances(nodes, edges, g.origin, ap, forward=g.forward)
+            t2 = clock()
+            t_pipe.append(t1 - t0)
+            t_det.append(t2 - t1)
+    elapsed = time.perf_counter() - t_start
+    load1 = os.getloadavg()
+    n = [len(g.pipe.net.nodes) for g in graphs]
+    m = [len(g.pipe.net.edges) for g in graphs]
+    f = [len(g.pipe.last.facets) for g in graphs]
+    o = [len(g.pipe.last.obstacles) for g in graphs]
+    head = (
+        "| call | nodes | edges | facets | objects | median (µs) | min | p10 | p90 | target (µs) "
+        "| median / target |"
+    )
+    rows = [head, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for name, ts in (
+        ("`AttentionPipeline.detect` (map mode, per frame)", t_pipe),
+        ("`detect_affordances` alone", t_det),
+    ):
+        rows.append(
+            f"| {name} | {min(n)}–{max(n)} | {min(m)}–{max(m)} | {min(f)}–{max(f)} "
+            f"| {min(o)}–{max(o)} | **{us(ts, 50):.1f}** | {us(ts, 0):.1f} | {us(ts, 10):.1f} "
+            f"| {us(ts, 90):.1f} | {TARGET_US:.0f} | {us(ts, 50) / TARGET_US:.2f} |"
+        )
+    return [
+        '### Map mode, DD-GNG graphs of floor + box + wall scenes (issue 23: "≤ 0.136 ms at '
+        '300 nodes")',
+        "",
+        f"{len(graphs)} scenes of `box_wall_scene` series 0 (ToF at 0.25 scale, no noise); "
+        f"DD-GNG with k = {MAP_K:g} (max_nodes 300), {WARMUP_CYCLES} learning cycles on the "
+        f"wall alone, then the box and {MAP_SENSE:g} s of sensing, attention loop closed, "
+        '"map" source. '
+        f"{per_graph} calls per graph, interleaved ({elapsed:.0f} s of timing; load average "
+        f"{load0[0]:.2f} before, {load1[0]:.2f} after). *objects*: labels of kind object on "
+        "the graph (before the map steps merge them).",
+        "",
+        *rows,
+        "",
+    ]
 
 
 def scene_with_nodes(target: int, seed: int) -> SyntheticScene:
@@ -132,9 +273,6 @@ def main(argv: list[str] | None = None) -> None:
     elapsed = time.perf_counter() - t_start
     load1 = os.getloadavg()
 
-    def us(xs: list[int], q: float) -> float:
-        return float(np.percentile(np.asarray(xs) / 1e3, q))
-
     rows = [
         "| nodes (target) | nodes | edges | facets | detect median (µs) | min | p10 | p90 "
         "| kernel median (µs) "
@@ -153,16 +291,23 @@ def main(argv: list[str] | None = None) -> None:
             f"| {us(full, 90):.1f} | {us(times['kernel'][size], 50):.1f} "
             f"| {us(times['tri'][size], 50):.1f} | {TARGET_US:.0f} |"
         )
+    maps = map_table(args) if args.map_scenes else []
     cmd = " ".join([".venv/bin/python", *sys.argv])
     text = "\n".join(
         [
             "## Affordance detection speed (§7.2)",
             "",
             f"Command: `{cmd}`  ",
-            f"Machine: {machine('numpy', 'numba')}  ",
-            f"Date: {datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds')}; "
-            f"load average {load0[0]:.2f} before, {load1[0]:.2f} after "
-            f"({elapsed:.0f} s of timing; the cores are shared).",
+            f"Machine: {machine('numpy', 'numba', 'mujoco')}  ",
+            f"Date: {datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds')}. "
+            "Wall time per call; the two cores are shared with other processes, so medians "
+            "include their load (*min* is close to what an idle core gives).",
+            "",
+            *maps,
+            "### Synthetic floor + block graphs",
+            "",
+            f"Load average {load0[0]:.2f} before, {load1[0]:.2f} after "
+            f"({elapsed:.0f} s of timing).",
             "",
             f"{args.graphs} GNG-like floor + block graphs per size, {per_graph} calls each, "
             "interleaved; wall time per call. *detect*: `detect_affordances` (validation, "

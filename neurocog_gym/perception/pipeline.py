@@ -328,6 +328,52 @@ class AttentionPipeline:
             forward=forward, ground_z=ground_z,
         )  # fmt: skip
         t2 = time.perf_counter()
+        aff = self._objects(aff, points, sensor_origin, forward, holder)
+        t3 = time.perf_counter()
+        self._remember(aff, t)
+        self.last = aff
+        self.n_steps += 1
+        self.timings = {
+            "gng": t1 - t0,
+            "affordance": t2 - t1,
+            "refine": t3 - t2,
+            "total": time.perf_counter() - t0,
+        }
+        return aff
+
+    def detect(
+        self,
+        sensor_origin: np.ndarray,
+        forward=(1.0, 0.0, 0.0),
+        ground_z: float | None = None,
+        points: np.ndarray | None = None,
+    ) -> Affordances:
+        """The affordance half of a :meth:`step` on the current graph, nothing learned.
+
+        :func:`detect_affordances` on the map, then the source's object steps (the map-mode
+        steps of :meth:`_map_objects`, or the raw-point refinement on ``points``), exactly as
+        :meth:`step` does after its learning cycle; the attention memory, :attr:`last` and
+        :attr:`timings` are left alone. This is the per-frame detection the §7.2 figure
+        (0.136 ms) is about (``scripts/bench_affordance.py`` times it).
+
+        Args:
+            sensor_origin: (3,) metres, where the sensors are (facet normals face it).
+            forward: (3,) walking direction (width is across it, length along it).
+            ground_z: metres, known ground level, or None to estimate it from the graph.
+            points: (N, 3) float, metres: the frame, read only in "points" mode (None there:
+                the graph's measures are kept).
+
+        Returns:
+            The affordances on the current graph.
+        """
+        aff = detect_affordances(
+            self.net.nodes, self.net.edges, sensor_origin, self.affordance_params,
+            forward=forward, ground_z=ground_z,
+        )  # fmt: skip
+        return self._objects(aff, points, sensor_origin, forward, None)
+
+    def _objects(self, aff, points, sensor_origin, forward, holder) -> Affordances:
+        """The affordance source's steps after :func:`detect_affordances` (one cycle)."""
         walls = self.params.view_wall_width > 0.0 and self.params.view_cut >= 0.0
         if self.params.affordance_source == "map":
             if aff.obstacles and math.isfinite(aff.ground_z):
@@ -345,16 +391,6 @@ class AttentionPipeline:
                 aff = self._refine(aff, points, forward, sensor_origin, frame)
             if frame is not None and walls:
                 aff = self._view_walls(aff, points, forward, sensor_origin, frame)
-        t3 = time.perf_counter()
-        self._remember(aff, t)
-        self.last = aff
-        self.n_steps += 1
-        self.timings = {
-            "gng": t1 - t0,
-            "affordance": t2 - t1,
-            "refine": t3 - t2,
-            "total": time.perf_counter() - t0,
-        }
         return aff
 
     def _map_objects(self, aff: Affordances, sensor_origin, forward) -> Affordances:

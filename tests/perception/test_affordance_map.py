@@ -160,6 +160,38 @@ def test_map_mode_sizes_are_the_high_nodes_extents_plus_the_spacing_correction()
     assert aff.label_kinds == tuple(o.kind for o in aff.objects)
 
 
+def _same(a, b):
+    """Two Affordances with the same objects, facets and labels (arrays exactly equal)."""
+    assert a.label_kinds == b.label_kinds and len(a.objects) == len(b.objects)
+    for x, y in zip(a.objects, b.objects, strict=True):
+        for f in x._fields:
+            np.testing.assert_array_equal(getattr(x, f), getattr(y, f), err_msg=f)
+    np.testing.assert_array_equal(a.facets, b.facets)
+    np.testing.assert_array_equal(a.facet_labels, b.facet_labels)
+    np.testing.assert_array_equal(a.suspected_boxes, b.suspected_boxes)
+
+
+def test_detect_repeats_the_steps_affordances_on_the_same_graph():
+    # map mode: the graph alone; points mode: the same frame's raw points
+    for source in ("map", "points"):
+        pipe, aff = _run(source, cycles=150)
+        memory = pipe.memory_boxes.copy()
+        pts = _box_frame(np.random.default_rng(0))
+        again = pipe.detect(ORIGIN, points=None if source == "map" else pts)
+        _same(again, aff)
+        assert any(o.kind == "object" for o in again.objects)
+        assert pipe.last is aff and pipe.n_steps == 150  # nothing learned or remembered
+        np.testing.assert_array_equal(pipe.memory_boxes, memory)
+    # points mode without the frame keeps the graph's measures: the map's own node extents
+    pipe, aff = _run("points", cycles=150)
+    raw = pipe.detect(ORIGIN)
+    assert [o.kind for o in raw.objects] == [o.kind for o in aff.objects]
+    assert any(
+        o.kind == "object" and (r.length != o.length or r.width != o.width)
+        for r, o in zip(raw.objects, aff.objects, strict=True)
+    ), "the refinement changed the sizes on the step, not on detect without points"
+
+
 def test_points_mode_is_the_default_and_unchanged():
     a_pipe, a = _run(None, cycles=120)
     b_pipe, b = _run("points", cycles=120)
