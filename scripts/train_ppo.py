@@ -10,8 +10,9 @@ Files in ``--out``: ``args.json``, ``checkpoints/ppo_<steps>_steps.zip`` (every
 ``--checkpoint-every`` env steps), ``tb/`` (TensorBoard: ``tensorboard --logdir OUT/tb``; besides
 SB3's losses it logs ``outcome/success``, ``outcome/touch``, ``outcome/fail`` over finished
 episodes), ``model.zip`` (the final model) and ``train_summary.json`` (steps, wall time,
-steps/s, outcome counts, fails split into fell / stuck). ``--resume`` continues from the newest
-checkpoint (or ``model.zip``) up to ``--total-steps``. Observations are normalised by SB3's
+steps/s, outcome counts, fails split into fell / stuck). ``--resume`` continues from the saved
+model with the most env steps (the newest checkpoint or ``model.zip``) up to ``--total-steps``.
+Observations are normalised by SB3's
 ``VecNormalize`` (``--no-normalize-obs`` turns it off): its running statistics are saved as
 ``vecnormalize.pkl`` beside ``model.zip`` and ``ppo_vecnormalize_<steps>_steps.pkl`` beside each
 checkpoint (written before the zip, both atomically), restored on ``--resume``, and loaded by
@@ -213,13 +214,28 @@ def _make_vec_env(args: Args):
 
 
 def _latest_checkpoint(out: Path) -> Path | None:
-    ckpts = sorted(
-        (out / "checkpoints").glob("ppo_*_steps.zip"),
-        key=lambda p: int(re.search(r"ppo_(\d+)_steps", p.name).group(1)),
-    )
-    if ckpts:
-        return ckpts[-1]
-    return out / "model.zip" if (out / "model.zip").exists() else None
+    """The saved model of ``out`` with the most env steps: a checkpoint or ``model.zip``.
+
+    ``model.zip`` is written at the end of a run, after the last checkpoint, and may hold more
+    steps than it (a run of 720,928 steps has its last 20,000-step checkpoint at 720,000), so
+    the steps are read from each file (SB3 keeps ``num_timesteps`` in the zip's ``data``).
+    """
+    found = [
+        (int(re.search(r"ppo_(\d+)_steps", p.name).group(1)), p)
+        for p in (out / "checkpoints").glob("ppo_*_steps.zip")
+    ]
+    final = out / "model.zip"
+    if final.exists():
+        found.append((_saved_steps(final), final))
+    return max(found, key=lambda sp: sp[0])[1] if found else None
+
+
+def _saved_steps(model: Path) -> int:
+    """``num_timesteps`` of a stable-baselines3 zip (its ``data`` entry, JSON)."""
+    import zipfile
+
+    with zipfile.ZipFile(model) as z:
+        return int(json.loads(z.read("data")).get("num_timesteps", 0))
 
 
 def stats_path(model: Path) -> Path:

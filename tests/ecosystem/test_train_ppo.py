@@ -271,3 +271,29 @@ def test_train_from_depth_and_bench_in_the_models_mode(tmp_path):
              str(bench))  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert json.loads((bench / "summary.json").read_text())["sudden"]["trials"] == 1
+
+
+def test_resume_takes_the_model_with_most_steps(tmp_path):
+    """--resume continues from model.zip when it holds more steps than the last checkpoint."""
+    import importlib.util
+    import json
+    import zipfile
+
+    spec = importlib.util.spec_from_file_location("train_ppo", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+
+    def save(path, steps):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(path, "w") as z:
+            z.writestr("data", json.dumps({"num_timesteps": steps}))
+
+    assert mod._latest_checkpoint(tmp_path) is None
+    save(tmp_path / "checkpoints" / "ppo_20000_steps.zip", 20_000)
+    save(tmp_path / "checkpoints" / "ppo_700000_steps.zip", 700_000)
+    assert mod._latest_checkpoint(tmp_path).name == "ppo_700000_steps.zip"
+    save(tmp_path / "model.zip", 720_928)  # the run's end, after its last checkpoint
+    assert mod._latest_checkpoint(tmp_path).name == "model.zip"
+    save(tmp_path / "model.zip", 10_000)  # an old final model, checkpoints of a longer run
+    assert mod._latest_checkpoint(tmp_path).name == "ppo_700000_steps.zip"
