@@ -31,6 +31,11 @@ import numpy as np
 
 OUTCOMES: tuple[str, ...] = ("success", "touch", "fail")
 SCENARIOS: tuple[str, ...] = ("sudden", "static")
+STONE_SCENARIOS: tuple[str, ...] = ("stones", "stones-moving")
+"""``NeuroCog/SteppingStones-v1`` still and moving: success = crossed without a foot in the pit,
+fail = a foot in the pit, a fall, or not across in time (defined exactly in
+:class:`neurocog_gym.envs.stones.SteppingStonesEnv`); ``touch`` is never given. The paper
+reports no counts for them (no entry in :data:`PAPER_TABLE4`)."""
 
 #: Table 4 (real robot): counts of success (never touched), success with touching, failed.
 PAPER_TABLE4: dict[str, dict[str, int]] = {
@@ -178,11 +183,28 @@ def similarity_by_outcome(records: Iterable[Mapping]) -> dict:
     }
 
 
+def _quantile(v: np.ndarray, q: float) -> float:
+    """The q-quantile of ``v`` (linear, NumPy's default), ``inf`` counting as never.
+
+    A quantile that falls on or between a never is never (``np.quantile`` gives NaN at
+    inf * 0).
+    """
+    if len(v) == 0:
+        return math.inf
+    v = np.sort(v)
+    pos = q * (len(v) - 1)
+    lo, hi = int(math.floor(pos)), int(math.ceil(pos))
+    if not math.isfinite(v[hi]):
+        return math.inf
+    return float(v[lo] + (v[hi] - v[lo]) * (pos - lo))
+
+
 def latency_summary(records: Iterable[Mapping], within: float = ACCURATE_WITHIN) -> dict:
     """The §6.2 chain over the trials that carry a ``latency`` (sudden trials).
 
     A trial in which an event never happened counts as infinitely late, so the median is the
-    time by which half the trials had the event (None when fewer than half had it at all).
+    time by which half the trials had the event (None when fewer than half had it at all);
+    the quartiles likewise.
 
     Args:
         records: trial records; those without a ``latency`` (static, older runs) are left out.
@@ -190,24 +212,28 @@ def latency_summary(records: Iterable[Mapping], within: float = ACCURATE_WITHIN)
 
     Returns:
         ``{"n", "accurate_within": share of trials with an accurate affordance at most
-        ``within`` s after the appearance, "within": within, and per key of
-        :data:`LATENCY_KEYS` {"median", "happened" (trials with the event)}}``; shares are None
-        when ``n`` is 0.
+        ``within`` s after the appearance, "accurate_within_ci": its 95 % Wilson interval
+        [lo, hi], "within": within, and per key of :data:`LATENCY_KEYS` and
+        ``"first_frame_s"`` (the first sensor frame on the block) {"median", "q1",
+        "q3" (s; None: never), "happened" (trials with the event)}}``; shares are None when
+        ``n`` is 0.
     """
     lats = [r["latency"] for r in records if r.get("latency")]
     n = len(lats)
     out: dict = {"n": n, "within": within}
-    for key in LATENCY_KEYS:
+    for key in (*LATENCY_KEYS, "first_frame_s"):
         v = np.array([math.inf if x.get(key) is None else float(x[key]) for x in lats])
-        med = float(np.median(v)) if n else math.inf
+        q1, med, q3 = (_quantile(v, q) for q in (0.25, 0.5, 0.75))
         out[key] = {
             "median": med if math.isfinite(med) else None,
+            "q1": q1 if math.isfinite(q1) else None,
+            "q3": q3 if math.isfinite(q3) else None,
             "happened": int(np.isfinite(v).sum()),
         }
     acc = [x.get("accurate_s") for x in lats]
-    out["accurate_within"] = (
-        sum(a is not None and a <= within + 1e-9 for a in acc) / n if n else None
-    )
+    k = sum(a is not None and a <= within + 1e-9 for a in acc)
+    out["accurate_within"] = k / n if n else None
+    out["accurate_within_ci"] = list(wilson_interval(k, n)) if n else None
     return out
 
 

@@ -74,6 +74,54 @@ def in_region(block: Block, pts: np.ndarray, pad: float) -> np.ndarray:
     )
 
 
+NONHOMOGENEOUS_MARGIN = 0.05
+"""m: how far round a block's footprint (and above its top) a node still counts as on it for
+the *first non-homogeneous nodes* (:func:`nonhomogeneous_on`): the facets a GNG spans from a
+block's top edge down to the floor (its bevels) have their lower nodes outside the footprint,
+within about half the 10 cm node spacing the attention brings (Table 2's sparse net, 15–25 cm,
+puts them farther, but its top nodes are then inside)."""
+
+
+def nonhomogeneous_on(
+    block: Block,
+    nodes: np.ndarray,
+    aff: Affordances | None,
+    max_tilt: float = AffordanceParams.terrain_max_tilt,
+    margin: float = NONHOMOGENEOUS_MARGIN,
+) -> bool:
+    """Does the graph show *non-homogeneous nodes* on the block (§6.2, Fig. 10)?
+
+    §4 of the paper: "if there is a nonhomogeneous normal vector for any area, the Dynamic
+    Attention system increases the density of nodes there". Our reading, per perception step:
+    a node is non-homogeneous when it is a corner of a facet whose Eq. (1) normal is tilted
+    from the vertical by more than ``max_tilt`` (the Eq. (3) γ of that one facet beyond safe
+    terrain's ``terrain_max_tilt``, 20°): its normals no longer agree with the floor's. The
+    block shows them when such a node lies in its footprint grown by ``margin`` (and no higher
+    than ``margin`` above its top, :func:`in_region`).
+
+    One node lifted a few centimetres above a sparse floor does not count: its facets, 15–25 cm
+    across, tilt by less than 20° until the node reaches the block's top or its neighbours
+    crowd in; the raised-node rule of the detector (``raised_node_tolerance``) labels such a
+    node an object at once, so the two are different events.
+
+    Args:
+        block: the block, as placed.
+        nodes: (n, 3) float, metres: the graph's nodes (``pipeline.net.nodes``), the ones the
+            facets of ``aff`` index.
+        aff: the step's affordances (their ``facets`` and ``facet_normals``); None: no.
+        max_tilt: rad, the tilt beyond which a facet is non-homogeneous.
+        margin: m, the growth of the footprint.
+    """
+    if aff is None or len(aff.facets) == 0:
+        return False
+    nodes = np.asarray(nodes, dtype=np.float64).reshape(-1, 3)
+    tilted = aff.facets[aff.facet_normals[:, 2] < math.cos(max_tilt)]
+    if len(tilted) == 0:
+        return False
+    ids = np.unique(tilted)
+    return bool(in_region(block, nodes[ids], margin).any())
+
+
 def region_area(block: Block, pad: float) -> float:
     """m²: the padded footprint."""
     return (block.length + 2 * pad) * (block.width + 2 * pad)
