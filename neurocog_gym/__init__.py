@@ -5,6 +5,7 @@ Importing the package registers every environment id (SPEC §9):
 * ``NeuroCog/Walk-v1`` — flat-ground trotting on the CPG.
 * ``NeuroCog/SuddenObstacle-v1`` — a block appears in a front leg's swing path (§6.5.1).
 * ``NeuroCog/StaticObstacle-v1`` — blocks lie across the path (§6.5.2).
+* ``NeuroCog/SteppingStones-v1`` — flat stones over a pit, still or sliding (§6.4, Videos S2/S3).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ ENV_IDS: tuple[str, ...] = (
     "NeuroCog/Walk-v1",
     "NeuroCog/SuddenObstacle-v1",
     "NeuroCog/StaticObstacle-v1",
+    "NeuroCog/SteppingStones-v1",
 )
 
 # vector_entry_point: ``gymnasium.make_vec(id, n)`` (mode None or "vector_entry_point") gives a
@@ -47,4 +49,10 @@ register(
     entry_point="neurocog_gym.envs.static:StaticObstacleEnv",
     vector_entry_point="neurocog_gym.envs.make_vec:static_obstacle_vector",
     max_episode_steps=1000,
+)
+register(
+    id="NeuroCog/SteppingStones-v1",
+    entry_point="neurocog_gym.envs.stones:SteppingStonesEnv",
+    vector_entry_point="neurocog_gym.envs.make_vec:stepping_stones_vector",
+    max_episode_steps=1500,
 )

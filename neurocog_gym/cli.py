@@ -137,6 +137,11 @@ def _cmd_bench(args) -> int:
     res = run_benchmark(cfg)
     for s in scenarios:
         c = res.summary[s]
+        if c["paper"] is None:  # stepping stones: success = crossed, no paper count
+            lo, hi = c["wilson95"]["success"]
+            print(f"{s}: {c['success']} crossed / {c['fail']} fail of {c['trials']} "
+                  f"({100 * lo:.0f}-{100 * hi:.0f} % crossed, 95 % Wilson)")  # fmt: skip
+            continue
         print(f"{s}: {c['success']} success / {c['touch']} touch / {c['fail']} fail of "
               f"{c['trials']} (paper {c['paper']['success']}/{c['paper']['touch']}/"
               f"{c['paper']['fail']} of {c['paper']['trials']})")  # fmt: skip
@@ -259,8 +264,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("bench", help="sudden- and static-obstacle trials beside Table 4 (§6.5)",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
-    p.add_argument("--scenario", choices=("sudden", "static", "all"), default="all",
-                   help="which obstacle task")  # fmt: skip
+    p.add_argument("--scenario",
+                   choices=("sudden", "static", "all", "stones", "stones-moving"),
+                   default="all",
+                   help="which task (all: sudden and static; stones, stones-moving: "
+                        "NeuroCog/SteppingStones-v1 still and moving)")  # fmt: skip
     p.add_argument("--trials", type=_positive_int, default=50,
                    help="per scenario (paper: 50)")  # fmt: skip
     p.add_argument("--seed", type=_nonneg_int, default=0,

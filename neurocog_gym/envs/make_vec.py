@@ -48,3 +48,8 @@ def sudden_obstacle_vector(num_envs: int = 1, **kwargs) -> VectorEnv:
 def static_obstacle_vector(num_envs: int = 1, **kwargs) -> VectorEnv:
     """Vector entry point of ``NeuroCog/StaticObstacle-v1`` (see :func:`make_vector`)."""
     return make_vector("NeuroCog/StaticObstacle-v1", num_envs, **kwargs)
+
+
+def stepping_stones_vector(num_envs: int = 1, **kwargs) -> VectorEnv:
+    """Vector entry point of ``NeuroCog/SteppingStones-v1`` (see :func:`make_vector`)."""
+    return make_vector("NeuroCog/SteppingStones-v1", num_envs, **kwargs)
