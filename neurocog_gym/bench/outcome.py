@@ -31,6 +31,11 @@ import numpy as np
 
 OUTCOMES: tuple[str, ...] = ("success", "touch", "fail")
 SCENARIOS: tuple[str, ...] = ("sudden", "static")
+STONE_SCENARIOS: tuple[str, ...] = ("stones", "stones-moving")
+"""``NeuroCog/SteppingStones-v1`` still and moving: success = crossed without a foot in the pit,
+fail = a foot in the pit, a fall, or not across in time (defined exactly in
+:class:`neurocog_gym.envs.stones.SteppingStonesEnv`); ``touch`` is never given. The paper
+reports no counts for them (no entry in :data:`PAPER_TABLE4`)."""
 
 #: Table 4 (real robot): counts of success (never touched), success with touching, failed.
 PAPER_TABLE4: dict[str, dict[str, int]] = {

@@ -48,14 +48,20 @@ from pathlib import Path
 import numpy as np
 
 from neurocog_gym import io
-from neurocog_gym.bench.outcome import PAPER_TABLE4, SCENARIOS, scenario_summary
+from neurocog_gym.bench.outcome import PAPER_TABLE4, SCENARIOS, STONE_SCENARIOS, scenario_summary
 from neurocog_gym.bench.records import load_trials
 from neurocog_gym.bench.report import write_report
 
 ENV_IDS: dict[str, str] = {
     "sudden": "NeuroCog/SuddenObstacle-v1",
     "static": "NeuroCog/StaticObstacle-v1",
+    "stones": "NeuroCog/SteppingStones-v1",
+    "stones-moving": "NeuroCog/SteppingStones-v1",
 }
+SCENARIO_KWARGS: dict[str, dict] = {"stones-moving": {"moving": True}}
+"""``gymnasium.make`` arguments of a scenario beyond its id."""
+STONE_RECORD_KEYS: tuple[str, ...] = ("crossed", "in_pit", "pit_leg", "pit_at", "course")
+"""Fields of a stepping-stones trial's last ``info`` copied into its record."""
 CONTROL_DT = 0.01
 """s, the envs' control cycle (SPEC §9)."""
 GNG_OF_ATTENTION: dict[str, str] = {"on": "ddgng", "off": "gng", "mlgng": "mlgng"}
@@ -96,7 +102,7 @@ class BenchConfig:
     out: Path
     """Run folder."""
     scenarios: tuple[str, ...] = SCENARIOS
-    """Scenarios to run, a subset of ("sudden", "static")."""
+    """Scenarios to run, a subset of ("sudden", "static", "stones", "stones-moving")."""
     trials: int = PAPER_TRIALS
     """Trials per scenario (the paper: 50)."""
     seed: int = 0
@@ -124,9 +130,10 @@ class BenchConfig:
     """Sampling of the similarity curve."""
 
     def __post_init__(self):
-        if not self.scenarios or any(s not in SCENARIOS for s in self.scenarios):
+        known = SCENARIOS + STONE_SCENARIOS
+        if not self.scenarios or any(s not in known for s in self.scenarios):
             raise ValueError(
-                f"scenarios must be a non-empty subset of {SCENARIOS}, got {self.scenarios}"
+                f"scenarios must be a non-empty subset of {known}, got {self.scenarios}"
             )
         if len(set(self.scenarios)) != len(self.scenarios):
             raise ValueError(f"scenarios repeat: {self.scenarios}")
@@ -480,6 +487,7 @@ def make_env(
         kwargs["max_episode_steps"] = max(1, int(round(max_seconds / CONTROL_DT)))
     if privileged:
         kwargs["privileged"] = True
+    kwargs.update(SCENARIO_KWARGS.get(scenario, {}))
     kwargs.update(env_kwargs or {})
     return gym.make(ENV_IDS[scenario], **kwargs)
 
@@ -626,6 +634,7 @@ def run_trial(
             "gng": u.pipeline.params.gng,
             "affordance_source": u.pipeline.params.affordance_source,
         },
+        **{k: info[k] for k in STONE_RECORD_KEYS if k in info},
     }
 
 
@@ -789,7 +798,7 @@ def summarize(records: list[dict], config: BenchConfig, elapsed_s: float | None 
         summ = scenario_summary(rs)
         summ["requested"] = config.trials
         summ["complete"] = len(rs) == config.trials
-        summ["paper"] = PAPER_TABLE4[s]
+        summ["paper"] = PAPER_TABLE4.get(s)  # None: no paper count (stepping stones)
         out[s] = summ
     from neurocog_gym import __version__
 
@@ -911,8 +920,9 @@ def run_benchmark(config: BenchConfig) -> BenchResult:
     elapsed = time.perf_counter() - t0
     summary = summarize(records, config, elapsed)
     io.atomic_write_json(summary_path, summary)
-    if config.report:
-        write_report([config.out], config.out)
+    if config.report and any(s in SCENARIOS for s in config.scenarios):
+        write_report([config.out], config.out)  # the report's tables are the obstacle tasks'
+
     return BenchResult(
         summary=summary, ran=ran, skipped=skipped, elapsed_s=elapsed, workers=used["workers"]
     )
