@@ -23,8 +23,11 @@ In provision mode the AEF network's per-leg direction slots carry the wanted bod
 (``train/aef.py``); in interrupt mode they carry v^l.
 
 The fit keeps state across an episode (the teacher's state, the boxes it has seen, its heading):
-:meth:`Fit.reset` at every episode start. It runs on the policy's side of the observation
-(``policies.AEFPolicy`` feeds it what the obstacle envs observe); no env runs it.
+:meth:`Fit.reset` at every episode start. It runs on the policy's side of the observation; no env
+runs it. :class:`Fit` (with ``avoidance.SuddenAvoidance``) is the readable form; the policy
+(``policies.AEFPolicy``) runs the same decision as one compiled call
+(``_fit_kernel.decide_kernel``, parameters from :func:`kernel_params`), and
+``tests/policies/test_aef_compiled.py`` checks the two give the same actions bit for bit.
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from neurocog_gym.locomotion import _fit_kernel as _k
-from neurocog_gym.locomotion.avoidance import AvoidanceParams, SuddenAvoidance
+from neurocog_gym.locomotion.avoidance import FOOT_RADIUS, AvoidanceParams, SuddenAvoidance
 from neurocog_gym.robot.names import FRONT_LEGS
 
 MODE_NONE = 0
@@ -56,6 +59,41 @@ class FitParams:
     avoidance: AvoidanceParams = field(default_factory=AvoidanceParams)
     """The stop / side-step / pass teacher for blocks that appear within reach
     (``avoidance.py``); ``AvoidanceParams(enabled=False)`` leaves the two rules above alone."""
+
+
+def kernel_params(params: FitParams | None = None) -> np.ndarray:
+    """``params`` (None: the defaults) as ``_fit_kernel.decide_kernel`` reads them: (N_PARAMS,)."""
+    p = params or FitParams()
+    a = p.avoidance
+    out = np.empty(_k.N_PARAMS)
+    for index, value in (
+        (_k.P_LOOKAHEAD, p.lookahead),
+        (_k.P_NEAR, p.near),
+        (_k.P_CORRIDOR, p.corridor),
+        (_k.P_ENABLED, 1.0 if a.enabled else 0.0),
+        (_k.P_TRIGGER, a.trigger),
+        (_k.P_LANE_R, FOOT_RADIUS + a.margin),  # as SuddenAvoidance.update sums it
+        (_k.P_LANE_HYSTERESIS, a.lane_hysteresis),
+        (_k.P_SUDDEN_RANGE, a.sudden_range),
+        (_k.P_MIN_HEIGHT, a.min_height),
+        (_k.P_STEP_OVER_HEIGHT, a.step_over_height),
+        (_k.P_SAME_BOX, a.same_box),
+        (_k.P_T_REV, a.t_rev),
+        (_k.P_BACKOFF, a.backoff),
+        (_k.P_K_SIDE, a.k_side),
+        (_k.P_KX, a.kx),
+        (_k.P_SIDE_BACKOFF, a.side_backoff),
+        (_k.P_K_MIN, a.k_min),
+        (_k.P_K_MAX, a.k_max),
+        (_k.P_SIDE_COR, a.side_cor),
+        (_k.P_SIDE_DIR, a.side_dir),
+        (_k.P_COR_GAIN, a.cor_gain),
+        (_k.P_DIR_GAIN, a.dir_gain),
+        (_k.P_SAG_GAIN, a.sag_gain),
+        (_k.P_BRAKE_FROM, a.brake_from),
+    ):
+        out[index] = value
+    return out
 
 
 @dataclass

@@ -24,6 +24,13 @@ The policy keeps state across an episode (the fit's, the odometry, the cycle clo
 
 With ``interrupt_gain=0`` only the walking provision acts: the ``aef-provision`` ablation
 (``make_policy("aef-provision")``).
+
+A cycle is one compiled call (``_aef_kernel.policy_step``: odometry, frames, the fit's decision
+as ``_fit_kernel.decide_kernel``, the network's normalised input, over buffers the policy owns),
+then the NumPy forward pass of the acting head only (issue 22: a cycle within 5 % of a step).
+The pieces below (:class:`Odometry`, :func:`to_frame`, :func:`boxes_in_frame`) with
+``locomotion.fit.Fit`` are the readable form of the same cycle;
+``tests/policies/test_aef_compiled.py`` checks the two give the same actions bit for bit.
 """
 
 from __future__ import annotations
@@ -34,17 +41,21 @@ from pathlib import Path
 import numpy as np
 
 from neurocog_gym import paths
-from neurocog_gym.locomotion.aef import AEFWeights
+from neurocog_gym.locomotion import _fit_kernel as _fk
+from neurocog_gym.locomotion._avoidance_kernel import N_OUT
+from neurocog_gym.locomotion.aef import N_INPUTS, AEFWeights
+from neurocog_gym.locomotion.avoidance import SuddenAvoidance
 from neurocog_gym.locomotion.fit import (
     MODE_INTERRUPT,
     MODE_NONE,
     MODE_PROVISION,
-    Fit,
     FitDecision,
     FitParams,
+    kernel_params,
 )
 from neurocog_gym.policies import _aef_kernel as _k
 from neurocog_gym.policies.base import ACTION_DIM
+from neurocog_gym.robot.names import FRONT_LEGS
 
 
 class AEFPolicy:
@@ -75,7 +86,7 @@ class AEFPolicy:
         "torso_quat",
         "torso_lin_vel",
     )
-    """The observation keys the policy reads (the obstacle envs have them all)."""
+    """The observation keys the policy reads (the obstacle envs have them all; flat arrays)."""
 
     def __init__(
         self,
@@ -90,7 +101,25 @@ class AEFPolicy:
         if not dt > 0:
             raise ValueError(f"dt must be positive, got {dt}")
         self.dt = float(dt)
-        self.fit = Fit(fit)
+        self.fit_params = fit or FitParams()
+        self._par = kernel_params(self.fit_params)
+        self._front = np.array(FRONT_LEGS, dtype=np.int64)
+        w = self.weights
+        self._in_norm = np.ascontiguousarray(np.stack([w.in_mean, w.in_std]), dtype=np.float64)
+        # The forward pass stays NumPy: its tanh is not libm's (it differs in the last bit for a
+        # third of the values), so a compiled one would not give the same actions bit for bit.
+        self._x = np.zeros(N_INPUTS)
+        self._trunk = tuple(_Layer(W, b) for W, b in w.layers)
+        self._head_interrupt = _Layer(*w.head_interrupt)
+        self._head_provision = _Layer(*w.head_provision)
+        self._sf = np.zeros(_k.SF_TEACHER + _fk.N_TF)
+        self._si = np.zeros(_k.SI_TEACHER + _fk.N_TI, dtype=np.int64)
+        self._known = np.zeros((SuddenAvoidance.known_capacity, 2))
+        self._known_sudden = np.zeros(SuddenAvoidance.known_capacity, dtype=np.bool_)
+        self._inlane = np.zeros(4, dtype=np.bool_)
+        self._geometry = np.zeros(4 + N_OUT)
+        self._rows3 = np.zeros((_k.N_ROWS, 3))
+        self._boxes = np.zeros((8, 2, 3))
         self.reset()
 
     def reset(self, env=None) -> None:
@@ -98,40 +127,80 @@ class AEFPolicy:
 
         ``env`` is ignored (the hook's signature, :func:`~neurocog_gym.policies.start_episode`).
         """
-        self.fit.reset()
-        self._cycles = 0
-        self._odo = Odometry()
+        self._sf[:] = 0.0
+        self._sf[_k.SF_TEACHER + _fk.TF_C] = 1.0  # SuddenAvoidance.reset's heading (cos, sin)
+        self._si[:] = 0
+        self._si[_k.SI_TEACHER + _fk.TI_STATE] = _fk.WALK
+        self._known[:] = 0.0
+        self._known_sudden[:] = False
         self.mode = MODE_NONE
-        self.decision: FitDecision | None = None
+        self._decided = False
+
+    @property
+    def decision(self) -> FitDecision | None:
+        """The last cycle's decision (copies), None before the first call of the episode."""
+        if not self._decided:
+            return None
+        r = self._rows3
+        return FitDecision(
+            mode=int(self._si[_k.SI_MODE]),
+            provision=r[_k.R_PROVISION].copy(),
+            slots=r[_k.R_SLOTS : _k.R_PROVISION].copy(),
+            target=int(self._si[_k.SI_TARGET]),
+        )
 
     def __call__(self, obs) -> np.ndarray:
         """Map one observation of an obstacle env to the 15-value action."""
-        yaw, origin = self._odo.update(obs["torso_quat"], obs["torso_lin_vel"], self.dt)
-        t = self._cycles * self.dt
-        self._cycles += 1
-        legs = to_frame(np.asarray(obs["leg_joints"]).reshape(12, 3), yaw, origin).reshape(4, 3, 3)
-        feet = to_frame(np.asarray(obs["feet"]).reshape(4, 3), yaw, origin)
-        boxes = boxes_in_frame(obs["remembered_blocks"], yaw, origin)
-        hit = np.rint(np.asarray(obs["block_met"], dtype=np.float64)).astype(np.int64)
-        hit[hit >= len(boxes)] = -1
-        direction = np.asarray(obs["interrupt_direction"], dtype=np.float64).reshape(4, 3)
-        d = self.fit.decide(
-            t, yaw, direction, hit, feet, legs[:, 0], legs[:, 1], legs[:, 2], boxes
+        mode = _k.policy_step(
+            obs["torso_quat"], obs["torso_lin_vel"], obs["leg_joints"], obs["feet"],
+            obs["remembered_blocks"], obs["block_met"], obs["interrupt_direction"],
+            obs["aef_input"], self.dt, self._par, self._front, self._in_norm, self._sf, self._si,
+            self._known, self._known_sudden, self._inlane, self._geometry, self._rows3,
+            self._boxes, self._x,
         )  # fmt: skip
-        self.decision, self.mode = d, d.mode
+        if mode < 0:
+            self._grow_or_raise(obs, mode)
+            return self(obs)
+        self.mode = mode
+        self._decided = True
         action = np.zeros(ACTION_DIM, dtype=np.float32)
-        if d.mode == MODE_NONE:
-            return action
-        x = np.asarray(obs["aef_input"], dtype=np.float64).copy()
-        # The slots at the observation's precision, as the env handed them to the network.
-        x[3:15] = d.slots.astype(np.float32).ravel()
-        interrupt, provision = self.weights.forward(x)
-        if d.mode == MODE_INTERRUPT:
-            mask = np.repeat(np.abs(d.slots).sum(axis=1) > 0, 3)
+        if mode == MODE_PROVISION:
+            action[12:] = self._forward(self._head_provision)
+        elif mode == MODE_INTERRUPT:
+            interrupt = self._forward(self._head_interrupt)
+            slots = self._rows3[_k.R_SLOTS : _k.R_PROVISION]
+            mask = np.repeat(np.abs(slots).sum(axis=1) > 0, 3)
             action[:12] = np.clip(self.interrupt_gain * interrupt * mask, -1.0, 1.0)
-        elif d.mode == MODE_PROVISION:
-            action[12:] = provision
         return action
+
+    def _forward(self, head: _Layer) -> np.ndarray:
+        """``AEFWeights.forward`` of the input ``policy_step`` wrote, for one head (a buffer)."""
+        h = self._x
+        for layer in self._trunk:
+            h = layer(h)
+        return head(h)
+
+    def _grow_or_raise(self, obs, code: int) -> None:
+        if code == _k.SMALL_BUFFER:
+            self._boxes = np.zeros((np.size(obs["remembered_blocks"]) // 7, 2, 3))
+            return
+        sizes = {k: np.shape(obs[k]) for k in self.obs_keys}
+        raise ValueError(f"AEFPolicy: observation arrays of unexpected sizes: {sizes}")
+
+
+class _Layer:
+    """One tanh layer of the network over its own buffers: tanh(h @ W.T + b), as NumPy does it."""
+
+    def __init__(self, W: np.ndarray, b: np.ndarray):
+        self.W_T = np.asarray(W, dtype=np.float64).T
+        self.b = np.asarray(b, dtype=np.float64)
+        self.z = np.empty(len(self.b))
+        self.out = np.empty(len(self.b))
+
+    def __call__(self, h: np.ndarray) -> np.ndarray:
+        np.dot(h, self.W_T, out=self.z)
+        np.add(self.z, self.b, out=self.z)
+        return np.tanh(self.z, out=self.out)
 
 
 class Odometry:
@@ -159,7 +228,8 @@ def to_frame(points: np.ndarray, yaw: float, origin: np.ndarray) -> np.ndarray:
     """(N, 3) points observed in the torso's heading frame, in the odometry frame (float64)."""
     p = np.asarray(points).reshape(-1, 3)
     out = np.empty((len(p), 3))
-    _k.points_to_frame(p, np.cos(yaw), np.sin(yaw), float(origin[0]), float(origin[1]), out)
+    c, s = np.cos(yaw), np.sin(yaw)
+    _k.points_to_frame(p.reshape(-1), c, s, float(origin[0]), float(origin[1]), out)
     return out
 
 
@@ -172,5 +242,6 @@ def boxes_in_frame(rows, yaw: float, origin: np.ndarray) -> np.ndarray:
     """
     rows = np.asarray(rows).reshape(-1, 7)
     out = np.empty((len(rows), 2, 3))
-    k = _k.rows_to_boxes(rows, np.cos(yaw), np.sin(yaw), float(origin[0]), float(origin[1]), out)
+    c, s = np.cos(yaw), np.sin(yaw)
+    k = _k.rows_to_boxes(rows.reshape(-1), c, s, float(origin[0]), float(origin[1]), out)
     return out[:k]
