@@ -1559,6 +1559,10 @@ def map_objects_kernel(
     stamp = np.full(n, -1, np.int64)
     order = np.argsort(fgroup, kind="mergesort")
     lens = np.empty(max(edges.shape[0], 1))
+    # Up to 62 groups, one pass over the edges for all of them (each node's groups as bits of
+    # ``member``) instead of one pass per group; the spacings are the same medians.
+    bits = ngroups <= 62
+    member = np.zeros(n if bits else 0, np.int64)
     q = 0
     while q < order.shape[0] and fgroup[order[q]] < 0:
         q += 1
@@ -1582,6 +1586,8 @@ def map_objects_kernel(
                 if stamp[v] == g:
                     continue
                 stamp[v] = g
+                if bits:
+                    member[v] |= np.int64(1) << g
                 out[g, M_NNODES] += 1.0
                 x = nodes[v, 0]
                 y = nodes[v, 1]
@@ -1601,22 +1607,270 @@ def map_objects_kernel(
                     b = bins[v]
                     if b >= 0:
                         out[g, M_VIEW] = min(out[g, M_VIEW], edge[b] - slope[v])
-        k = 0
-        for e in range(edges.shape[0]):
-            a = edges[e, 0]
-            b = edges[e, 1]
-            if stamp[a] != g or stamp[b] != g:
-                continue
-            if not (nodes[a, 2] - ground > tol and nodes[b, 2] - ground > tol):
-                continue
-            dx = nodes[a, 0] - nodes[b, 0]
-            dy = nodes[a, 1] - nodes[b, 1]
-            lens[k] = np.sqrt(dx * dx + dy * dy)
-            k += 1
-        if k > 0:
-            out[g, M_SPACING] = np.median(lens[:k])
+        if not bits:
+            k = 0
+            for e in range(edges.shape[0]):
+                a = edges[e, 0]
+                b = edges[e, 1]
+                if stamp[a] != g or stamp[b] != g:
+                    continue
+                if not (nodes[a, 2] - ground > tol and nodes[b, 2] - ground > tol):
+                    continue
+                dx = nodes[a, 0] - nodes[b, 0]
+                dy = nodes[a, 1] - nodes[b, 1]
+                lens[k] = np.sqrt(dx * dx + dy * dy)
+                k += 1
+            if k > 0:
+                out[g, M_SPACING] = np.median(lens[:k])
         if out[g, M_NHIGH] == 0.0:
             out[g, M_HEIGHT] = np.nan
             for c in (M_F0, M_F1, M_L0, M_L1):
                 out[g, c] = np.nan
+    if bits and ngroups > 0:
+        # Edges joining two high nodes of a group, counted per group, then gathered per group
+        # in edge order (CSR), then the median of each group's lengths.
+        m = edges.shape[0]
+        start = np.zeros(ngroups + 1, np.int64)
+        shared = np.zeros(m, np.int64)
+        for e in range(m):
+            a = edges[e, 0]
+            b = edges[e, 1]
+            both = member[a] & member[b]
+            if both == 0 or not (nodes[a, 2] - ground > tol and nodes[b, 2] - ground > tol):
+                continue
+            shared[e] = both
+            for g in range(ngroups):
+                if (both >> g) & 1:
+                    start[g + 1] += 1
+        for g in range(ngroups):
+            start[g + 1] += start[g]
+        fill = start[:ngroups].copy()
+        buf = np.empty(max(start[ngroups], 1))
+        for e in range(m):
+            both = shared[e]
+            if both == 0:
+                continue
+            a = edges[e, 0]
+            b = edges[e, 1]
+            dx = nodes[a, 0] - nodes[b, 0]
+            dy = nodes[a, 1] - nodes[b, 1]
+            d = np.sqrt(dx * dx + dy * dy)
+            for g in range(ngroups):
+                if (both >> g) & 1:
+                    buf[fill[g]] = d
+                    fill[g] += 1
+        for g in range(ngroups):
+            if start[g + 1] > start[g]:
+                out[g, M_SPACING] = np.median(buf[start[g] : start[g + 1]])
     return out
+
+
+# Packed parameters of ``map_step_kernel`` (the pipeline's map-mode settings).
+Q_MERGE = 0
+Q_VIEW_BINS = 1
+Q_EDGE_CORRECTION = 2
+Q_VIEW_CUT = 3
+Q_MIN_HEIGHT = 4
+N_MAP_PARAMS = 5
+
+
+@njit(cache=True)
+def _root(root, a):
+    while root[a] != a:
+        a = root[a]
+    return a
+
+
+@njit(cache=True)
+def map_step_kernel(
+    nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box, prm, mq
+):
+    """The map-mode object steps on ``detect_kernel``'s labels, in one compiled call.
+
+    ``AttentionPipeline`` reads an object's measures from the map alone ("map" mode): object
+    labels whose boxes overlap in the ground plane are one group (union in label order; the
+    group takes its first label's place), each group measured by :func:`map_objects_kernel`
+    (high-node extents plus ``Q_EDGE_CORRECTION`` × their spacing, the box grown by half of
+    it in the ground plane), relabelled wall at the top of the graph's own view
+    (``Q_VIEW_CUT``, :func:`view_edge_kernel` on the nodes), and suspected below the density
+    threshold. A merged group's position is the facet-count-weighted mean of its pieces', its
+    size their sum; its normal is returned *unnormalised* (the weighted sum) with its
+    ``merged`` flag set, for the caller to normalise with ``np.linalg.norm`` (whose rounding
+    is not a plain square root's) and to set γ from.
+
+    Args:
+        nodes: (n, 3) float64, metres.
+        edges: (m, 2) int64.
+        origin: (3,) float64, metres, the sensors.
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        ground: metres, the ground level ``detect_kernel`` used (finite).
+        facets: (F, 3) int64, ``detect_kernel``'s facets.
+        flabels: (F,) int64, their labels.
+        lab: (K, N_LABEL_COLS) float64, the label table.
+        pos: (K, 3) float64, the labels' positions.
+        normal: (K, 3) float64, their unit normals.
+        box: (K, 2, 3) float64, their boxes.
+        prm: (N_PARAMS,) float64, the detection's packed parameters (``P_*``).
+        mq: (N_MAP_PARAMS,) float64, the map-mode parameters (``Q_*``).
+
+    Returns:
+        ``(lab, pos, normal, box, new_of, merged, sboxes)``: the new label table (K', L_*
+        columns), positions, normals, boxes, the (K,) int64 new index of each old label, the
+        (K',) bool merged flags and the (S, 2, 3) padded boxes of the suspected objects.
+    """
+    nl = lab.shape[0]
+    tol = prm[P_GROUND_TOL]
+    objs = np.empty(nl, np.int64)
+    nobj = 0
+    for k in range(nl):
+        if lab[k, L_KIND] == KIND_OBJECT:
+            objs[nobj] = k
+            nobj += 1
+    root = np.arange(nobj)
+    if mq[Q_MERGE] != 0.0:
+        for a in range(nobj):
+            ka = objs[a]
+            for b in range(a + 1, nobj):
+                kb = objs[b]
+                if (
+                    box[ka, 0, 0] <= box[kb, 1, 0]
+                    and box[kb, 0, 0] <= box[ka, 1, 0]
+                    and box[ka, 0, 1] <= box[kb, 1, 1]
+                    and box[kb, 0, 1] <= box[ka, 1, 1]
+                ):
+                    root[_root(root, b)] = _root(root, a)
+    gid = np.full(nobj, -1, np.int64)
+    label_group = np.full(nl, -1, np.int64)
+    ng = 0
+    for a in range(nobj):
+        r = _root(root, a)
+        if gid[r] < 0:
+            gid[r] = ng
+            ng += 1
+        label_group[objs[a]] = gid[r]
+    nf = facets.shape[0]
+    fgroup = np.empty(nf, np.int64)
+    counts = np.zeros(nl, np.int64)
+    for f in range(nf):
+        fgroup[f] = label_group[flabels[f]]
+        counts[flabels[f]] += 1
+    slope, bins, vedge = view_edge_kernel(nodes, fx, fy, origin, int(mq[Q_VIEW_BINS]), 4.0)
+    res = map_objects_kernel(
+        nodes, edges, facets, fgroup, ng, ground, tol, fx, fy, slope, bins, vedge
+    )
+    # Each group's members in label order; the group's first label is where it goes.
+    first = np.full(ng, -1, np.int64)
+    nmem = np.zeros(ng, np.int64)
+    for k in range(nl):
+        g = label_group[k]
+        if g >= 0:
+            if first[g] < 0:
+                first[g] = k
+            nmem[g] += 1
+    nout = nl - nobj + ng
+    olab = np.empty((nout, N_LABEL_COLS))
+    opos = np.empty((nout, 3))
+    onormal = np.empty((nout, 3))
+    obox = np.empty((nout, 2, 3))
+    merged = np.zeros(nout, np.bool_)
+    new_of = np.full(nl, -1, np.int64)
+    out_of_group = np.full(ng, -1, np.int64)
+    corr = mq[Q_EDGE_CORRECTION]
+    view_cut = mq[Q_VIEW_CUT]
+    nsus = 0
+    j = 0
+    for k in range(nl):
+        g = label_group[k]
+        if g >= 0 and first[g] != k:
+            continue
+        new_of[k] = j
+        for c in range(N_LABEL_COLS):
+            olab[j, c] = lab[k, c]
+        for d in range(3):
+            opos[j, d] = pos[k, d]
+            onormal[j, d] = normal[k, d]
+            obox[j, 0, d] = box[k, 0, d]
+            obox[j, 1, d] = box[k, 1, d]
+        if g >= 0:
+            out_of_group[g] = j
+            if nmem[g] > 1:
+                # Facet-count-weighted sums in label order (as the NumPy sums of the Python
+                # steps they replace), the size a plain sum.
+                merged[j] = True
+                wsum = 0
+                px = 0.0
+                py = 0.0
+                pz = 0.0
+                nx = 0.0
+                ny = 0.0
+                nz = 0.0
+                size = 0.0
+                for q in range(k, nl):
+                    if label_group[q] != g:
+                        continue
+                    w = counts[q]
+                    wsum += w
+                    px += pos[q, 0] * w
+                    py += pos[q, 1] * w
+                    pz += pos[q, 2] * w
+                    nx += normal[q, 0] * w
+                    ny += normal[q, 1] * w
+                    nz += normal[q, 2] * w
+                    size += lab[q, L_SIZE]
+                fw = float(wsum)
+                opos[j, 0] = px / fw
+                opos[j, 1] = py / fw
+                opos[j, 2] = pz / fw
+                onormal[j, 0] = nx
+                onormal[j, 1] = ny
+                onormal[j, 2] = nz
+                olab[j, L_SIZE] = size
+            n_nodes = res[g, M_NNODES]
+            if n_nodes == 0.0:
+                if olab[j, L_KIND] == KIND_OBJECT and olab[j, L_SUSPECTED] != 0.0:
+                    nsus += 1
+                j += 1
+                continue
+            for d in range(3):
+                obox[j, 0, d] = res[g, M_BOX + d]
+                obox[j, 1, d] = res[g, M_BOX + 3 + d]
+            if res[g, M_NHIGH] > 0.0:
+                cc = corr * res[g, M_SPACING]
+                obox[j, 0, 0] -= 0.5 * cc
+                obox[j, 0, 1] -= 0.5 * cc
+                obox[j, 1, 0] += 0.5 * cc
+                obox[j, 1, 1] += 0.5 * cc
+                olab[j, L_HEIGHT] = res[g, M_HEIGHT]
+                olab[j, L_WIDTH] = (res[g, M_L1] - res[g, M_L0]) + cc
+                olab[j, L_LENGTH] = (res[g, M_F1] - res[g, M_F0]) + cc
+            sz = olab[j, L_SIZE]
+            density = n_nodes / sz if sz > 0 else 0.0
+            olab[j, L_NNODES] = n_nodes
+            olab[j, L_DENSITY] = density
+            olab[j, L_SUSPECTED] = 1.0 if density < prm[P_DENSITY] else 0.0
+            if (
+                view_cut >= 0.0
+                and res[g, M_VIEW] <= view_cut
+                and olab[j, L_HEIGHT] >= mq[Q_MIN_HEIGHT]
+            ):
+                olab[j, L_KIND] = KIND_WALL
+                olab[j, L_SUSPECTED] = 0.0
+            if olab[j, L_KIND] == KIND_OBJECT and olab[j, L_SUSPECTED] != 0.0:
+                nsus += 1
+        elif olab[j, L_KIND] == KIND_OBJECT and olab[j, L_SUSPECTED] != 0.0:
+            nsus += 1
+        j += 1
+    for k in range(nl):
+        if label_group[k] >= 0:
+            new_of[k] = out_of_group[label_group[k]]
+    pad = prm[P_PADDING]
+    sboxes = np.empty((nsus, 2, 3))
+    q = 0
+    for i in range(nout):
+        if olab[i, L_KIND] == KIND_OBJECT and olab[i, L_SUSPECTED] != 0.0:
+            for d in range(3):
+                sboxes[q, 0, d] = obox[i, 0, d] - pad
+                sboxes[q, 1, d] = obox[i, 1, d] + pad
+            q += 1
+    return olab, opos, onormal, obox, new_of, merged, sboxes

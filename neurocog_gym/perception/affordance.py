@@ -321,6 +321,26 @@ def detect_affordances(
         ValueError: on wrong shapes or dtypes, edge indices outside [0, n), a non-finite
             ``sensor_origin``, or a ``forward`` without a horizontal part.
     """
+    raw = detect_raw(nodes, edges, sensor_origin, params, forward, ground_z)
+    if isinstance(raw, Affordances):
+        return raw
+    return assemble(*raw)
+
+
+def detect_raw(
+    nodes: np.ndarray,
+    edges: np.ndarray,
+    sensor_origin: Sequence[float] | np.ndarray | None,
+    params: AffordanceParams | None = None,
+    forward: Sequence[float] | np.ndarray = _DEFAULT_FORWARD,
+    ground_z: float | None = None,
+):
+    """:func:`detect_affordances` up to the kernel's arrays (for callers that go on in numba).
+
+    Same arguments, checks and errors. Returns the empty :class:`Affordances` of a degenerate
+    graph, or the tuple ``(ground, truncated, facets, normals, flabels, lab, pos, normal, box,
+    sboxes)`` that :func:`assemble` turns into the result.
+    """
     p = DEFAULT_PARAMS if params is None else params
     nodes, edges = _check_graph(nodes, edges)
     origin, away = _origin(sensor_origin)
@@ -342,6 +362,11 @@ def detect_affordances(
         raise ValueError(f"{n_bad} edges index nodes outside [0, {nodes.shape[0]})")
     if facets.shape[0] == 0:
         return _empty_result(ground_z)
+    return ground, truncated, facets, normals, flabels, lab, pos, normal, box, boxes
+
+
+def assemble(ground, truncated, facets, normals, flabels, lab, pos, normal, box, boxes):
+    """The :class:`Affordances` of the kernel's arrays (see :func:`detect_raw`)."""
     # Label table columns 0..8: L_KIND, L_HEIGHT, L_WIDTH, L_LENGTH, L_GAMMA, L_DENSITY, L_SIZE,
     # L_NNODES, L_SUSPECTED (positional: a NamedTuple built by keyword costs more).
     objects = [

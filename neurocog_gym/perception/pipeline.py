@@ -58,11 +58,12 @@ re-measured offline on the benchmark's end-state frames). Two checks ride on it:
 Two affordance sources (``PipelineParams.affordance_source``): everything above is the
 ``"points"`` source, this project's addition and the default. ``"map"`` is the paper's
 (§4.2.1): no raw point is read after the learning cycle; each object's measures come from the
-graph's nodes and facets, with three map-mode steps (:meth:`AttentionPipeline._map_objects`):
+graph's nodes and facets, with three map-mode steps (:meth:`AttentionPipeline._detect_map`):
 overlapping object labels merged, width and length grown by the node spacing at the edges
 (boundary handling; the attention box grows with them, Algorithm 3's A_min/A_max), and objects
-at the top of the graph's own view relabelled wall. In "map" mode the ``"refine"`` timing is
-that of these steps. ``scripts/bench_affordance_map.py`` measures both.
+at the top of the graph's own view relabelled wall. In "map" mode these steps are compiled
+into the detection's call, and the ``"affordance"`` timing holds both (``"refine"`` is 0).
+``scripts/bench_affordance_map.py`` measures both sources.
 """
 
 from __future__ import annotations
@@ -78,7 +79,10 @@ from neurocog_gym.perception.affordance import (
     AffordanceObject,
     AffordanceParams,
     Affordances,
+    _forward_xy,
+    assemble,
     detect_affordances,
+    detect_raw,
 )
 from neurocog_gym.perception.gng import DDGNG, GNG, MLGNG, DDGNGParams
 
@@ -251,6 +255,7 @@ class AttentionPipeline:
         if affordance_source is not None:
             self.params = replace(self.params, affordance_source=affordance_source)
         self.affordance_params = affordance_params or AffordanceParams()
+        self._map_packed_of = (None, None)
         self.net = GNG_KINDS[self.params.gng](seed=seed, params=gng_params)
         self.memory_boxes = np.zeros((0, 2, 3))
         self.memory_time = np.zeros(0)
@@ -323,13 +328,17 @@ class AttentionPipeline:
         boxes = self.memory_boxes if len(self.memory_boxes) else None
         self.net.update(points, boxes)
         t1 = time.perf_counter()
-        aff = detect_affordances(
-            self.net.nodes, self.net.edges, sensor_origin, self.affordance_params,
-            forward=forward, ground_z=ground_z,
-        )  # fmt: skip
-        t2 = time.perf_counter()
-        aff = self._objects(aff, points, sensor_origin, forward, holder)
-        t3 = time.perf_counter()
+        if self.params.affordance_source == "map":
+            aff = self._detect_map(sensor_origin, forward, ground_z)
+            t2 = t3 = time.perf_counter()
+        else:
+            aff = detect_affordances(
+                self.net.nodes, self.net.edges, sensor_origin, self.affordance_params,
+                forward=forward, ground_z=ground_z,
+            )  # fmt: skip
+            t2 = time.perf_counter()
+            aff = self._objects(aff, points, sensor_origin, forward, holder)
+            t3 = time.perf_counter()
         self._remember(aff, t)
         self.last = aff
         self.n_steps += 1
@@ -366,6 +375,8 @@ class AttentionPipeline:
         Returns:
             The affordances on the current graph.
         """
+        if self.params.affordance_source == "map":
+            return self._detect_map(sensor_origin, forward, ground_z)
         aff = detect_affordances(
             self.net.nodes, self.net.edges, sensor_origin, self.affordance_params,
             forward=forward, ground_z=ground_z,
@@ -373,12 +384,9 @@ class AttentionPipeline:
         return self._objects(aff, points, sensor_origin, forward, None)
 
     def _objects(self, aff, points, sensor_origin, forward, holder) -> Affordances:
-        """The affordance source's steps after :func:`detect_affordances` (one cycle)."""
+        """The "points" source's steps after :func:`detect_affordances` (one cycle)."""
         walls = self.params.view_wall_width > 0.0 and self.params.view_cut >= 0.0
-        if self.params.affordance_source == "map":
-            if aff.obstacles and math.isfinite(aff.ground_z):
-                aff = self._map_objects(aff, sensor_origin, forward)
-        elif self.params.refine and (aff.obstacles or walls):
+        if self.params.refine and (aff.obstacles or walls):
             if holder is None:
                 frame = _frame_inputs(aff, points, forward, sensor_origin)
             else:
@@ -393,10 +401,29 @@ class AttentionPipeline:
                 aff = self._view_walls(aff, points, forward, sensor_origin, frame)
         return aff
 
-    def _map_objects(self, aff: Affordances, sensor_origin, forward) -> Affordances:
-        """Objects' measures from the map alone ("map" mode, §4.2.1; see the module docstring).
+    @property
+    def _map_packed(self) -> np.ndarray:
+        """(N_MAP_PARAMS,) float64: the map-mode settings, as ``map_step_kernel`` reads them.
 
-        Three steps on the graph's nodes and facets, nothing from the raw points:
+        Packed again whenever ``params`` is replaced.
+        """
+        p = self.params
+        if self._map_packed_of[0] is not p:
+            mq = np.empty(_k.N_MAP_PARAMS)
+            mq[_k.Q_MERGE] = 1.0 if p.map_merge else 0.0
+            mq[_k.Q_VIEW_BINS] = p.map_view_bins
+            mq[_k.Q_EDGE_CORRECTION] = p.map_edge_correction
+            mq[_k.Q_VIEW_CUT] = p.map_view_cut
+            mq[_k.Q_MIN_HEIGHT] = p.min_height
+            mq.flags.writeable = False
+            self._map_packed_of = (p, mq)
+        return self._map_packed_of[1]
+
+    def _detect_map(self, sensor_origin, forward, ground_z) -> Affordances:
+        """Detection and the map-mode object steps ("map" mode, §4.2.1; module docstring).
+
+        Three steps on the graph's nodes and facets, nothing from the raw points, in one
+        compiled call after the detection's (``_affordance_kernels.map_step_kernel``):
 
         * *fragments*: object labels whose boxes overlap in the ground plane are one object
           (``map_merge``); position and normal are the facet-count-weighted means of the
@@ -410,113 +437,44 @@ class AttentionPipeline:
           the sensors) of the graph in their azimuth is the foot of something whose top is
           out of sight (a wall beyond the 45°-pitched sensors' reach): relabelled wall
           (``map_view_cut``), so it is never attended.
+
+        The result objects are built once, from the kernels' arrays: until the steps were
+        compiled (issue 23, §7.2's 0.136 ms) they ran in Python on ``detect_affordances``'s
+        objects and cost as much as the detection itself at 300 nodes
+        (``scripts/bench_affordance.py``). Without ``sensor_origin`` the steps are skipped.
         """
-        p = self.params
         ap = self.affordance_params
-        objs = [k for k, o in enumerate(aff.objects) if o.kind == "object"]
         nodes, edges = self.net.nodes, self.net.edges
-        fwd = np.asarray(forward, dtype=np.float64).reshape(-1)
-        h = math.hypot(float(fwd[0]), float(fwd[1]))
-        origin = np.asarray(sensor_origin, dtype=np.float64).reshape(-1)
-        if h < 1e-9 or origin.shape != (3,) or len(nodes) == 0:
-            return aff
-        fx, fy = float(fwd[0]) / h, float(fwd[1]) / h
-        # Union of overlapping object boxes (a handful of objects: plain loops).
-        root = list(range(len(objs)))
-
-        def find(a):
-            while root[a] != a:
-                a = root[a]
-            return a
-
-        if p.map_merge:
-            for a in range(len(objs)):
-                ba = aff.objects[objs[a]].box
-                for b in range(a + 1, len(objs)):
-                    bb = aff.objects[objs[b]].box
-                    if (ba[0, 0] <= bb[1, 0] and bb[0, 0] <= ba[1, 0]
-                            and ba[0, 1] <= bb[1, 1] and bb[0, 1] <= ba[1, 1]):  # fmt: skip
-                        root[find(b)] = find(a)
-        gids: dict[int, int] = {}
-        members: list[list[int]] = []
-        label_group = np.full(len(aff.objects), -1, np.int64)
-        for a, k in enumerate(objs):
-            r = find(a)
-            if r not in gids:
-                gids[r] = len(members)
-                members.append([])
-            label_group[k] = gids[r]
-            members[gids[r]].append(k)
-        fgroup = label_group[aff.facet_labels]
-        slope, bins, edge = _k.view_edge_kernel(nodes, fx, fy, origin, p.map_view_bins, 4.0)
-        res = _k.map_objects_kernel(
-            nodes, edges, aff.facets, fgroup, len(members), float(aff.ground_z),
-            ap.ground_tolerance, fx, fy, slope, bins, edge,
+        raw = detect_raw(nodes, edges, sensor_origin, ap, forward, ground_z)
+        if isinstance(raw, Affordances):
+            return raw
+        ground, truncated, facets, normals, flabels, lab, pos, normal, box, _ = raw
+        if (
+            sensor_origin is None
+            or not math.isfinite(ground)
+            or not (lab[:, _k.L_KIND] == _k.KIND_OBJECT).any()
+        ):
+            return assemble(*raw)
+        origin = np.ascontiguousarray(sensor_origin, dtype=np.float64).reshape(-1)
+        fx, fy = _forward_xy(forward)
+        olab, opos, onormal, obox, new_of, merged, sboxes = _k.map_step_kernel(
+            nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box,
+            ap.packed, self._map_packed,
         )  # fmt: skip
-        counts = np.bincount(aff.facet_labels, minlength=len(aff.objects))
-        new_of = np.full(len(aff.objects), -1, np.int64)
-        objects: list[AffordanceObject] = []
-        for k, o in enumerate(aff.objects):
-            gi = int(label_group[k])
-            if gi < 0:
-                new_of[k] = len(objects)
-                objects.append(o)
-                continue
-            ks = members[gi]
-            if k != ks[0]:
-                continue  # merged into the group's first label
-            for q in ks:
-                new_of[q] = len(objects)
-            row = res[gi]
-            if len(ks) > 1:
-                wsum = float(counts[ks].sum())
-                pos = sum(aff.objects[q].position * counts[q] for q in ks) / wsum
-                nsum = sum(aff.objects[q].normal * counts[q] for q in ks)
+        aff = assemble(
+            ground, truncated, facets, normals, new_of[flabels], olab, opos, onormal, obox, sboxes
+        )
+        if merged.any():
+            # The merged normals come unnormalised: np.linalg.norm, as the Python steps had it
+            # (its rounding differs from a plain square root in one case in ten).
+            for j in np.flatnonzero(merged).tolist():
+                o = aff.objects[j]
+                nsum = o.normal
                 nn = float(np.linalg.norm(nsum))
-                normal = nsum / nn if nn > 1e-12 else np.zeros(3)
-                gamma = math.acos(min(1.0, max(-1.0, float(normal[2])))) if nn > 1e-12 else 0.0
-                size = float(sum(aff.objects[q].size for q in ks))
-                o = o._replace(position=pos, normal=normal, gamma=gamma, size=size)
-            n_nodes = int(row[_k.M_NNODES])
-            if n_nodes == 0:
-                objects.append(o)
-                continue
-            density = n_nodes / o.size if o.size > 0 else 0.0
-            box = row[_k.M_BOX : _k.M_BOX + 6].reshape(2, 3).copy()
-            if row[_k.M_NHIGH] > 0:
-                c = p.map_edge_correction * float(row[_k.M_SPACING])
-                box[0, :2] -= 0.5 * c
-                box[1, :2] += 0.5 * c
-                o = o._replace(
-                    height=float(row[_k.M_HEIGHT]),
-                    width=float(row[_k.M_L1] - row[_k.M_L0]) + c,
-                    length=float(row[_k.M_F1] - row[_k.M_F0]) + c,
-                )
-            o = o._replace(
-                n_nodes=n_nodes,
-                density=density,
-                box=box,
-                suspected=density < ap.density_threshold,
-            )
-            if (
-                p.map_view_cut >= 0.0
-                and row[_k.M_VIEW] <= p.map_view_cut
-                and o.height >= p.min_height
-            ):
-                o = o._replace(kind="wall", suspected=False)
-            objects.append(o)
-        pad = ap.suspect_padding
-        sboxes = np.array(
-            [
-                o.box + np.array([[-pad] * 3, [pad] * 3])
-                for o in objects
-                if o.kind == "object" and o.suspected
-            ]  # fmt: skip
-        ).reshape(-1, 2, 3)
-        return Affordances(
-            objects, sboxes, aff.facets, aff.facet_normals, new_of[aff.facet_labels],
-            tuple(o.kind for o in objects), aff.ground_z, aff.truncated,
-        )  # fmt: skip
+                unit = nsum / nn if nn > 1e-12 else np.zeros(3)
+                gamma = math.acos(min(1.0, max(-1.0, float(unit[2])))) if nn > 1e-12 else 0.0
+                aff.objects[j] = o._replace(normal=unit, gamma=gamma)
+        return aff
 
     def _refine(
         self, aff: Affordances, points: np.ndarray, forward, sensor_origin, frame=None

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from neurocog_gym.perception import _affordance_kernels as _k
+from neurocog_gym.perception.affordance import AffordanceObject, Affordances, detect_affordances
 from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -190,6 +191,158 @@ def test_detect_repeats_the_steps_affordances_on_the_same_graph():
         o.kind == "object" and (r.length != o.length or r.width != o.width)
         for r, o in zip(raw.objects, aff.objects, strict=True)
     ), "the refinement changed the sizes on the step, not on detect without points"
+
+
+class _Frozen:
+    """A graph standing in for a pipeline's net."""
+
+    def __init__(self, nodes, edges):
+        self.nodes, self.edges = nodes, edges
+
+
+def _graphs():
+    """Graphs of a map-mode run on the box frame (every 7th cycle of 300), each with forward
+    +x and a slanted one, and one with two overlapping pieces forced to merge."""
+    rng = np.random.default_rng(0)
+    pipe = AttentionPipeline(seed=3, affordance_source="map")
+    pts = _box_frame(rng)
+    out = []
+    for c in range(300):
+        pipe.step(pts, ORIGIN, 0.01 * c)
+        if c % 7 == 0:
+            out.append((pipe.net.nodes.copy(), pipe.net.edges.copy()))
+    return out
+
+
+@pytest.mark.parametrize("merge", [True, False])
+def test_compiled_map_steps_equal_the_numpy_oracle(merge):
+    pipe = AttentionPipeline(
+        affordance_source="map", params=PipelineParams(affordance_source="map", map_merge=merge)
+    )
+    checked = merged = 0
+    for nodes, edges in _graphs():
+        pipe.net = _Frozen(nodes, edges)
+        for fwd in ((1.0, 0.0, 0.0), (0.6, 0.8, 0.0)):
+            got = pipe.detect(ORIGIN, fwd)
+            aff = detect_affordances(nodes, edges, ORIGIN, pipe.affordance_params, forward=fwd)
+            if not (aff.obstacles and math.isfinite(aff.ground_z)):
+                continue
+            want = _map_objects_oracle(pipe, aff, ORIGIN, fwd)
+            _same(got, want)
+            assert got.ground_z == want.ground_z and got.truncated == want.truncated
+            checked += 1
+            merged += len(got.objects) < len(aff.objects)  # two labels became one
+    assert checked >= 40
+    if merge:
+        assert merged > 0, "no graph merged two pieces: the merge path went untested"
+
+
+def _map_objects_oracle(self, aff, sensor_origin, forward):
+    """NumPy oracle of the map-mode steps: the Python code they were before they were compiled
+    (``AttentionPipeline._detect_map``, ``map_step_kernel``), on ``detect_affordances``'s
+    result; ``self`` is the pipeline."""
+    p = self.params
+    ap = self.affordance_params
+    objs = [k for k, o in enumerate(aff.objects) if o.kind == "object"]
+    nodes, edges = self.net.nodes, self.net.edges
+    fwd = np.asarray(forward, dtype=np.float64).reshape(-1)
+    h = math.hypot(float(fwd[0]), float(fwd[1]))
+    origin = np.asarray(sensor_origin, dtype=np.float64).reshape(-1)
+    if h < 1e-9 or origin.shape != (3,) or len(nodes) == 0:
+        return aff
+    fx, fy = float(fwd[0]) / h, float(fwd[1]) / h
+    # Union of overlapping object boxes (a handful of objects: plain loops).
+    root = list(range(len(objs)))
+
+    def find(a):
+        while root[a] != a:
+            a = root[a]
+        return a
+
+    if p.map_merge:
+        for a in range(len(objs)):
+            ba = aff.objects[objs[a]].box
+            for b in range(a + 1, len(objs)):
+                bb = aff.objects[objs[b]].box
+                if (ba[0, 0] <= bb[1, 0] and bb[0, 0] <= ba[1, 0]
+                        and ba[0, 1] <= bb[1, 1] and bb[0, 1] <= ba[1, 1]):  # fmt: skip
+                    root[find(b)] = find(a)
+    gids: dict[int, int] = {}
+    members: list[list[int]] = []
+    label_group = np.full(len(aff.objects), -1, np.int64)
+    for a, k in enumerate(objs):
+        r = find(a)
+        if r not in gids:
+            gids[r] = len(members)
+            members.append([])
+        label_group[k] = gids[r]
+        members[gids[r]].append(k)
+    fgroup = label_group[aff.facet_labels]
+    slope, bins, edge = _k.view_edge_kernel(nodes, fx, fy, origin, p.map_view_bins, 4.0)
+    res = _k.map_objects_kernel(
+        nodes, edges, aff.facets, fgroup, len(members), float(aff.ground_z),
+        ap.ground_tolerance, fx, fy, slope, bins, edge,
+    )  # fmt: skip
+    counts = np.bincount(aff.facet_labels, minlength=len(aff.objects))
+    new_of = np.full(len(aff.objects), -1, np.int64)
+    objects: list[AffordanceObject] = []
+    for k, o in enumerate(aff.objects):
+        gi = int(label_group[k])
+        if gi < 0:
+            new_of[k] = len(objects)
+            objects.append(o)
+            continue
+        ks = members[gi]
+        if k != ks[0]:
+            continue  # merged into the group's first label
+        for q in ks:
+            new_of[q] = len(objects)
+        row = res[gi]
+        if len(ks) > 1:
+            wsum = float(counts[ks].sum())
+            pos = sum(aff.objects[q].position * counts[q] for q in ks) / wsum
+            nsum = sum(aff.objects[q].normal * counts[q] for q in ks)
+            nn = float(np.linalg.norm(nsum))
+            normal = nsum / nn if nn > 1e-12 else np.zeros(3)
+            gamma = math.acos(min(1.0, max(-1.0, float(normal[2])))) if nn > 1e-12 else 0.0
+            size = float(sum(aff.objects[q].size for q in ks))
+            o = o._replace(position=pos, normal=normal, gamma=gamma, size=size)
+        n_nodes = int(row[_k.M_NNODES])
+        if n_nodes == 0:
+            objects.append(o)
+            continue
+        density = n_nodes / o.size if o.size > 0 else 0.0
+        box = row[_k.M_BOX : _k.M_BOX + 6].reshape(2, 3).copy()
+        if row[_k.M_NHIGH] > 0:
+            c = p.map_edge_correction * float(row[_k.M_SPACING])
+            box[0, :2] -= 0.5 * c
+            box[1, :2] += 0.5 * c
+            o = o._replace(
+                height=float(row[_k.M_HEIGHT]),
+                width=float(row[_k.M_L1] - row[_k.M_L0]) + c,
+                length=float(row[_k.M_F1] - row[_k.M_F0]) + c,
+            )
+        o = o._replace(
+            n_nodes=n_nodes,
+            density=density,
+            box=box,
+            suspected=density < ap.density_threshold,
+        )
+        if p.map_view_cut >= 0.0 and row[_k.M_VIEW] <= p.map_view_cut and o.height >= p.min_height:
+            o = o._replace(kind="wall", suspected=False)
+        objects.append(o)
+    pad = ap.suspect_padding
+    sboxes = np.array(
+        [
+            o.box + np.array([[-pad] * 3, [pad] * 3])
+            for o in objects
+            if o.kind == "object" and o.suspected
+        ]  # fmt: skip
+    ).reshape(-1, 2, 3)
+    return Affordances(
+        objects, sboxes, aff.facets, aff.facet_normals, new_of[aff.facet_labels],
+        tuple(o.kind for o in objects), aff.ground_z, aff.truncated,
+    )  # fmt: skip
 
 
 def test_points_mode_is_the_default_and_unchanged():
