@@ -443,3 +443,15 @@ def test_bench_runs_both_stone_scenarios_with_blind(tmp_path):
     assert all(s["speed"] > 0 for r in moving for s in r["course"]["stones"])
     still = [r for r in recs if r["scenario"] == "stones"]
     assert all(s["speed"] == 0 for r in still for s in r["course"]["stones"])
+
+
+def test_cli_bench_scenario_stones(tmp_path, capsys):
+    from neurocog_gym.cli import main
+
+    out = tmp_path / "cli"
+    args = ["bench", "--scenario", "stones-moving", "--trials", "1", "--policy", "blind",
+            "--workers", "1", "--out", str(out)]  # fmt: skip
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "stones-moving: " in text and " crossed / " in text and "95 % Wilson" in text
+    assert (out / "summary.json").exists() and not (out / "report.md").exists()
