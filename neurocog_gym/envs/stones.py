@@ -162,7 +162,10 @@ class SteppingStonesEnv(ObstacleEnv):
 
     ## Arguments
 
-    As ``StaticObstacleEnv`` (the obstacle arguments), plus:
+    As ``WalkEnv`` and the obstacle envs' perception arguments (``tof``, ``perception``,
+    ``effectivity``, ``include_graph``, ``draw_overlay``, ``warmup_cycles``, ``pass_margin``,
+    ``privileged``, ``affordance_source``, ``observation_mode``; ``outcome``, the blocks'
+    thresholds, is unused: there are no blocks), plus:
 
     | argument | default | meaning |
     |---|---|---|
