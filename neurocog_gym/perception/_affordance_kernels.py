@@ -1694,9 +1694,9 @@ def map_step_kernel(
     it in the ground plane), relabelled wall at the top of the graph's own view
     (``Q_VIEW_CUT``, :func:`view_edge_kernel` on the nodes), and suspected below the density
     threshold. A merged group's position is the facet-count-weighted mean of its pieces', its
-    size their sum; its normal is returned *unnormalised* (the weighted sum) with its
-    ``merged`` flag set, for the caller to normalise with ``np.linalg.norm`` (whose rounding
-    is not a plain square root's) and to set γ from.
+    size their sum; its normal is returned *unnormalised* (the weighted sum) and its index
+    listed in ``merged``, for the caller to normalise as ``np.linalg.norm`` does (whose
+    rounding is not a plain square root's) and to set γ from.
 
     Args:
         nodes: (n, 3) float64, metres.
@@ -1715,9 +1715,10 @@ def map_step_kernel(
         mq: (N_MAP_PARAMS,) float64, the map-mode parameters (``Q_*``).
 
     Returns:
-        ``(lab, pos, normal, box, new_of, merged, sboxes)``: the new label table (K', L_*
-        columns), positions, normals, boxes, the (K,) int64 new index of each old label, the
-        (K',) bool merged flags and the (S, 2, 3) padded boxes of the suspected objects.
+        ``(lab, pos, normal, box, flabels, merged, sboxes)``: the new label table (K', L_*
+        columns), positions, normals, boxes, the (F,) int64 new label of each facet, the int64
+        indices of the merged labels and the (S, 2, 3) padded boxes of the suspected objects.
+        Without an object label the inputs come back as they are (``lab`` itself).
     """
     nl = lab.shape[0]
     tol = prm[P_GROUND_TOL]
@@ -1727,6 +1728,8 @@ def map_step_kernel(
         if lab[k, L_KIND] == KIND_OBJECT:
             objs[nobj] = k
             nobj += 1
+    if nobj == 0:
+        return lab, pos, normal, box, flabels, np.zeros(0, np.int64), np.empty((0, 2, 3))
     root = np.arange(nobj)
     if mq[Q_MERGE] != 0.0:
         for a in range(nobj):
@@ -1773,7 +1776,8 @@ def map_step_kernel(
     opos = np.empty((nout, 3))
     onormal = np.empty((nout, 3))
     obox = np.empty((nout, 2, 3))
-    merged = np.zeros(nout, np.bool_)
+    merged = np.empty(nout, np.int64)
+    nmerged = 0
     new_of = np.full(nl, -1, np.int64)
     out_of_group = np.full(ng, -1, np.int64)
     corr = mq[Q_EDGE_CORRECTION]
@@ -1797,7 +1801,8 @@ def map_step_kernel(
             if nmem[g] > 1:
                 # Facet-count-weighted sums in label order (as the NumPy sums of the Python
                 # steps they replace), the size a plain sum.
-                merged[j] = True
+                merged[nmerged] = j
+                nmerged += 1
                 wsum = 0
                 px = 0.0
                 py = 0.0
@@ -1864,6 +1869,9 @@ def map_step_kernel(
     for k in range(nl):
         if label_group[k] >= 0:
             new_of[k] = out_of_group[label_group[k]]
+    oflabels = np.empty(nf, np.int64)
+    for f in range(nf):
+        oflabels[f] = new_of[flabels[f]]
     pad = prm[P_PADDING]
     sboxes = np.empty((nsus, 2, 3))
     q = 0
@@ -1873,4 +1881,4 @@ def map_step_kernel(
                 sboxes[q, 0, d] = obox[i, 0, d] - pad
                 sboxes[q, 1, d] = obox[i, 1, d] + pad
             q += 1
-    return olab, opos, onormal, obox, new_of, merged, sboxes
+    return olab, opos, onormal, obox, oflabels, merged[:nmerged], sboxes

@@ -449,28 +449,26 @@ class AttentionPipeline:
         if isinstance(raw, Affordances):
             return raw
         ground, truncated, facets, normals, flabels, lab, pos, normal, box, _ = raw
-        if (
-            sensor_origin is None
-            or not math.isfinite(ground)
-            or not (lab[:, _k.L_KIND] == _k.KIND_OBJECT).any()
-        ):
+        if sensor_origin is None or not math.isfinite(ground):
             return assemble(*raw)
         origin = np.ascontiguousarray(sensor_origin, dtype=np.float64).reshape(-1)
         fx, fy = _forward_xy(forward)
-        olab, opos, onormal, obox, new_of, merged, sboxes = _k.map_step_kernel(
+        olab, opos, onormal, obox, oflabels, merged, sboxes = _k.map_step_kernel(
             nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box,
             ap.packed, self._map_packed,
         )  # fmt: skip
+        if olab is lab:
+            return assemble(*raw)  # no object: nothing to do
         aff = assemble(
-            ground, truncated, facets, normals, new_of[flabels], olab, opos, onormal, obox, sboxes
+            ground, truncated, facets, normals, oflabels, olab, opos, onormal, obox, sboxes
         )
-        if merged.any():
-            # The merged normals come unnormalised: np.linalg.norm, as the Python steps had it
-            # (its rounding differs from a plain square root in one case in ten).
-            for j in np.flatnonzero(merged).tolist():
+        if len(merged):
+            # The merged normals come unnormalised: normalised as np.linalg.norm does it,
+            # sqrt(x . x) (its rounding differs from sqrt(x² + y² + z²) in one case in ten).
+            for j in merged.tolist():
                 o = aff.objects[j]
                 nsum = o.normal
-                nn = float(np.linalg.norm(nsum))
+                nn = math.sqrt(float(nsum.dot(nsum)))
                 unit = nsum / nn if nn > 1e-12 else np.zeros(3)
                 gamma = math.acos(min(1.0, max(-1.0, float(unit[2])))) if nn > 1e-12 else 0.0
                 aff.objects[j] = o._replace(normal=unit, gamma=gamma)
