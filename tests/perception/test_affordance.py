@@ -508,10 +508,14 @@ def test_random_graphs_never_raise(graph, origin, ground):
 def test_bench_script_runs(tmp_path):
     out = tmp_path / "bench.md"
     cmd = [sys.executable, "scripts/bench_affordance.py", "--sizes", "150", "--repeats", "20"]
-    cmd += ["--graphs", "1", "--out", str(out)]
-    subprocess.run(cmd, cwd=REPO, env=ENV, check=True, capture_output=True, timeout=120)
+    cmd += ["--graphs", "1", "--map-scenes", "1", "--map-repeats", "20", "--out", str(out)]
+    subprocess.run(cmd, cwd=REPO, env=ENV, check=True, capture_output=True, timeout=180)
     text = out.read_text()
     assert "| 150 |" in text and "median" in text
+    # the map-mode table: one DD-GNG graph of a floor + box + wall scene, near 300 nodes
+    row = next(r for r in text.splitlines() if r.startswith("| `AttentionPipeline.detect`"))
+    lo, hi = (int(x) for x in row.split("|")[2].split("–"))
+    assert 280 <= lo <= hi <= 300
 
 
 def test_plot_script_runs(tmp_path):
