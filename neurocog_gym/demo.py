@@ -123,7 +123,7 @@ def bench_demo(
     Returns:
         The report path and the Table 4 lines (markdown).
     """
-    from neurocog_gym.bench.report import _table4, load_run, write_report
+    from neurocog_gym.bench.report import load_run, table4, write_report
     from neurocog_gym.bench.runner import BenchConfig, run_benchmark
 
     out = Path(out)
@@ -136,4 +136,4 @@ def bench_demo(
         )  # fmt: skip
         dirs.append(d)
     report = write_report(dirs, out)
-    return report, _table4([load_run(d) for d in dirs])
+    return report, table4([load_run(d) for d in dirs])

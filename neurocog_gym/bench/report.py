@@ -124,7 +124,8 @@ def _limit(max_seconds) -> str:
     return f"{max_seconds:g} s"
 
 
-def _table4(runs: list[Run]) -> list[str]:
+def table4(runs: list[Run]) -> list[str]:
+    """The Table 4 rows of ``runs`` (one per scenario and run) as markdown table lines."""
     lines = [
         "| Scenario | Run | Trials | Success | Touch | Fail | Success (never touched) [95 % CI] "
         "| Success incl. touch [95 % CI] |",
@@ -509,7 +510,7 @@ def write_report(
         "limit. Rates with 95 % Wilson intervals.",
         "",
     ]
-    md += _table4(runs)
+    md += table4(runs)
     md += ["", "## Table 5: failure analysis (surface similarity of the attention structure)", ""]
     md += [
         "μ (Eq. 12–16) between the topological-map nodes near the obstacle (inside the placed "
