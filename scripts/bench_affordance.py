@@ -5,7 +5,7 @@ Two tables. **Map mode on DD-GNG graphs** (issue 23: "detection ≤ 0.136 ms at 
 + wall scenes (``perception_scenes.box_wall_scene``, series 0, the scenes of
 ``scripts/bench_affordance_map.py``): the wall alone for ``WARMUP_CYCLES`` learning cycles on
 one frame (``AttentionPipeline.warm_up``), then the box appears and the pipeline runs 0.5 s at
-the sensor rate, attention loop closed. Table 2's k holds such a net at 80–140 nodes; to reach
+the sensor rate, attention loop closed. Table 2's k holds such a net at 80–100 nodes; to reach
 the 300 of §7.2 the utility test is relaxed (``k = 1e12``, the net held at ``max_nodes`` = 300,
 as ``scripts/bench_gng.py`` does for its larger nets). Timed on the final graph, calls
 interleaved across scenes: ``AttentionPipeline.detect`` (the affordance half of a map-mode
