@@ -79,7 +79,8 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
-from neurocog_gym.envs._kernels import block_outcome_step, depth_image, step_over_step
+from neurocog_gym.envs import _kernels as _k
+from neurocog_gym.envs._kernels import depth_image
 from neurocog_gym.envs.base import QuadrupedEnv, _as_slice
 from neurocog_gym.locomotion.effectivity import Effectivity, EffectivityParams, EffectivityState
 from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
@@ -215,6 +216,25 @@ class ObstacleEnv(QuadrupedEnv):
         self.perception_time = 0.0
         self.outcome_params = outcome or OutcomeParams()
         self._init_outcome_state()
+        self._arange = np.arange(self.effectivity.memory_capacity, dtype=np.int64)
+        self._slot_scratch = np.empty(self.effectivity.memory_capacity, np.int64)
+        k = _k
+        # (key, (start, stop)) in the observation buffer, in the observation's key order.
+        self._obs_proprio = (
+            ("joint_pos", (k.O_JOINT_POS, k.O_JOINT_VEL)),
+            ("joint_vel", (k.O_JOINT_VEL, k.O_TOUCH)),
+            ("touch", (k.O_TOUCH, k.O_QUAT)), ("torso_quat", (k.O_QUAT, k.O_LIN_VEL)),
+            ("torso_lin_vel", (k.O_LIN_VEL, k.O_ANG_VEL)),
+            ("torso_ang_vel", (k.O_ANG_VEL, k.O_HEIGHT)), ("torso_height", (k.O_HEIGHT, k.O_CPG)),
+            ("cpg", (k.O_CPG, k.O_SERVO)), ("servo_target", (k.O_SERVO, k.O_OBJECTS)),
+        )  # fmt: skip
+        self._obs_perceived = (
+            ("objects", (k.O_OBJECTS, k.O_MASK)), ("objects_mask", (k.O_MASK, k.O_AEF)),
+            ("aef_input", (k.O_AEF, k.O_DIRECTION)),
+            ("interrupt_direction", (k.O_DIRECTION, k.O_FOOTHOLD)),
+            ("foothold", (k.O_FOOTHOLD, k.O_MEETS)), ("path_meets_block", (k.O_MEETS, k.O_MET)),
+            ("block_met", (k.O_MET, k.O_BLOCKS)), ("remembered_blocks", (k.O_BLOCKS, k.O_FEET)),
+        )  # fmt: skip
 
     # -- spaces -------------------------------------------------------------------------------
 
@@ -360,8 +380,8 @@ class ObstacleEnv(QuadrupedEnv):
         self._was_touching = touching
         self.touched |= touching
         if self.pool.blocks:
-            far = float(self.pool.boxes()[:, 1, 0].max())
-            beyond = bool(self._feet()[:, 0].min() > far + self.pass_margin)
+            # The blocks' far x bound and the rearmost foot, from this cycle's _check_blocks.
+            beyond = bool(self._rear_foot > self._far_x + self.pass_margin)
             self.passed = beyond and not self._fell()
             if self.passed and self.passed_at is None:
                 self.passed_at = float(self.data.time)
@@ -378,10 +398,6 @@ class ObstacleEnv(QuadrupedEnv):
         self._elliptic = bool(self.model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC)
         self._is_front = np.zeros(4, dtype=bool)
         self._is_front[list(FRONT_LEGS)] = True
-        self._no_contacts = (
-            np.zeros((0, 2), np.int32), np.zeros((0, 3)), np.zeros((0, 9)),
-            np.zeros(0, np.int32), np.zeros(0, np.int32), np.zeros(0),
-        )  # fmt: skip
         self._blk_touch = np.zeros(n, dtype=bool)
         self._blk_top_force = np.zeros(n)
         self._blk_stand_run = np.zeros(n, dtype=np.int64)
@@ -392,7 +408,9 @@ class ObstacleEnv(QuadrupedEnv):
         self._blk_axis_sign = np.ones(n)
         self._over_state = np.full((n, 4), -1, dtype=np.int8)
         self._over_crossed = np.zeros((n, 4), dtype=bool)
+        self._blk_over = np.zeros(n, dtype=bool)
         self._prev_feet = np.zeros((4, 3))
+        self._far_x = self._rear_foot = math.nan
         self._reset_outcome()
 
     def _reset_outcome(self) -> None:
@@ -413,49 +431,48 @@ class ObstacleEnv(QuadrupedEnv):
         self._blk_stand_run[k] = 0
         self._over_state[k] = -1
         self._over_crossed[k] = False
+        self._blk_over[k] = False
 
     def _check_blocks(self, yaw: float) -> bool:
-        """This cycle's contact and pose checks of the blocks (the outcome); True if touching."""
+        """This cycle's contact and pose checks of the blocks (the outcome); True if touching.
+
+        One compiled call (``_kernels.outcome_cycle``), which also keeps the blocks' far x
+        bound and the rearmost foot's x for the pass test (``_far_x``, ``_rear_foot``).
+        """
         pool, d = self.pool, self.data
-        touching = pool.touching_any(d, self.robot.robot_geoms)
         feet = self._feet()
         k = len(pool.blocks)
+        touching = False
         if k:
             if not np.array_equal(pool.serial, self._serial_seen):
                 for slot in np.flatnonzero(pool.serial != self._serial_seen):
                     self._reset_slot(int(slot))
                 self._serial_seen = pool.serial.copy()
-            if touching:
-                n, con = d.ncon, d.contact
-                contacts = (con.geom[:n], con.pos[:n], con.frame[:n], con.efc_address[:n],
-                            con.dim[:n], d.efc_force)  # fmt: skip
-            else:
-                contacts = self._no_contacts  # the stand check needs robot-block contacts
-            block_outcome_step(
-                *contacts, self._elliptic, pool.slot_of, pool.robot_mask(self.robot.robot_geoms),
-                k, pool.body_ids, d.xpos, d.xmat, d.xquat, pool.half_sizes, pool.placed_pos,
-                pool.placed_quat, self._cos_max_tilt, self.outcome_params.stand_face_tol,
-                self._min_stand_force, int(self.outcome_params.stand_cycles),
-                self.outcome_params.knock_shift, self._cos_half_max_turn, self._blk_touch,
+            n, con = d.ncon, d.contact
+            p = self.outcome_params
+            touching, knocked, stood, self._far_x, self._rear_foot = _k.outcome_cycle(
+                con.geom[:n], con.pos[:n], con.frame[:n], con.efc_address[:n], con.dim[:n],
+                d.efc_force, self._elliptic, pool.slot_of,
+                pool.robot_mask(self.robot.robot_geoms), k, pool.body_ids, d.xpos, d.xmat,
+                d.xquat, pool.half_sizes, pool.placed_pos, pool.placed_quat,
+                self._cos_max_tilt, p.stand_face_tol, self._min_stand_force,
+                int(p.stand_cycles), p.knock_shift, self._cos_half_max_turn, self._blk_touch,
                 self._blk_top_force, self._blk_stand_run, self._blk_stood, self._blk_shift,
-                self._blk_turn, self._blk_knocked,
+                self._blk_turn, self._blk_knocked, feet, self._prev_feet, self._has_prev_feet,
+                np.array([math.cos(yaw), math.sin(yaw)]), self._blk_axis_sign,
+                self._over_state, self._over_crossed, self._is_front, self._blk_over,
             )  # fmt: skip
-            heading = np.array([math.cos(yaw), math.sin(yaw)])
-            step_over_step(
-                feet, self._prev_feet, self._has_prev_feet, heading, k, pool.body_ids, d.xpos,
-                d.xmat, pool.half_sizes, self._blk_axis_sign, self._over_state,
-                self._over_crossed,
-            )  # fmt: skip
-            self.knocked |= bool(self._blk_knocked[:k].any())
-            self.stood_on |= bool(self._blk_stood[:k].any())
-        self._prev_feet[:] = feet
+            self.knocked |= knocked
+            self.stood_on |= stood
+        else:
+            self._prev_feet[:] = feet
         self._has_prev_feet = True
         return touching
 
     def _blocks_stepped_over(self) -> np.ndarray:
         """(K,) bool: at least one front foot and one hind foot crossed the block above it."""
-        c = self._over_crossed[: len(self.pool.blocks)]
-        return c[:, self._is_front].any(axis=1) & c[:, ~self._is_front].any(axis=1)
+        # Kept by ``_check_blocks`` (``_kernels.outcome_cycle``) with the crossings.
+        return self._blk_over[: len(self.pool.blocks)].copy()
 
     def _before_control(self, interrupt: np.ndarray, provision: np.ndarray) -> None:
         """Count the cycles whose (clipped) action used each output group."""
@@ -493,15 +510,21 @@ class ObstacleEnv(QuadrupedEnv):
         k = len(self.pool.blocks)
         over = self._blocks_stepped_over()
         blocks = self.pool.blocks_json()
-        for i, b in enumerate(blocks):
-            b.update(
-                knocked=bool(self._blk_knocked[i]),
-                stood_on=bool(self._blk_stood[i]),
-                moved=round(float(self._blk_shift[i]), 6),
-                turned_deg=round(math.degrees(float(self._blk_turn[i])), 4),
-                feet_over=[bool(x) for x in self._over_crossed[i]],
-                stepped_over=bool(over[i]),
-            )
+        if blocks:
+            knocked = self._blk_knocked[:k].tolist()
+            stood = self._blk_stood[:k].tolist()
+            shift = self._blk_shift[:k].tolist()
+            turn = self._blk_turn[:k].tolist()
+            crossed = self._over_crossed[:k].tolist()
+            for i, b in enumerate(blocks):
+                b.update(
+                    knocked=knocked[i],
+                    stood_on=stood[i],
+                    moved=round(shift[i], 6),
+                    turned_deg=round(math.degrees(turn[i]), 4),
+                    feet_over=crossed[i],
+                    stepped_over=bool(over[i]),
+                )
         appeared = getattr(self, "appeared_at", None)
         from_appear = (
             round(self.passed_at - appeared, 4)
@@ -525,10 +548,18 @@ class ObstacleEnv(QuadrupedEnv):
 
     # -- observation ----------------------------------------------------------------------------
 
-    def _objects(self, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple]:
-        """The K nearest objects ahead in the torso's yaw frame (``rot``: world to yaw frame)."""
-        out = np.zeros((N_OBJECTS, len(OBJECT_FIELDS)), np.float32)
-        mask = np.zeros(N_OBJECTS, np.float32)
+    def _objects(
+        self, rot: np.ndarray, out: np.ndarray | None = None, mask: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, tuple]:
+        """The K nearest objects ahead in the torso's yaw frame (``rot``: world to yaw frame).
+
+        ``out`` (N_OBJECTS, 8) and ``mask`` (N_OBJECTS,) float32 zeros to write into (new
+        arrays when None).
+        """
+        if out is None:
+            out = np.zeros((N_OBJECTS, len(OBJECT_FIELDS)), np.float32)
+        if mask is None:
+            mask = np.zeros(N_OBJECTS, np.float32)
         aff = self.pipeline.last
         best = (0.0, 0.0, 0.0)
         if aff is None:
@@ -553,19 +584,56 @@ class ObstacleEnv(QuadrupedEnv):
         return out, mask, best
 
     def _get_obs(self) -> dict[str, np.ndarray]:
-        obs = self._proprioception(self._touch_now)
+        # One compiled pass (``_kernels.observation_kernel``) writes the keys into one new
+        # float32 buffer; the observation's arrays are views of it (a new buffer every call,
+        # so an observation kept by the caller is never overwritten).
+        d, r = self.data, self.robot
         yaw = self._yaw() if self._yaw_now is None else self._yaw_now
         c, s = np.cos(yaw), np.sin(yaw)
         rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
-        d, r = self.data, self.robot
         torso = d.xpos[r.torso_body]
+        touch = self.touch() if self._touch_now is None else self._touch_now
+        buf = np.zeros(_k.N_OBS, np.float32)
+        safe = np.empty(4, np.int8)
+        best = (0.0, 0.0, 0.0)
         if self._perceive:
-            self._perception_obs(obs, rot, torso, yaw)
-        joints = np.stack([d.xpos[r.hip_body], d.xpos[r.thigh_body], d.xpos[r.shank_body]], 1)
-        obs.update(
-            feet=_heading_frame(self._feet(), rot, torso).ravel(),
-            leg_joints=_heading_frame(joints.reshape(12, 3), rot, torso).ravel(),
-        )
+            _, _, best = self._objects(
+                rot, buf[_k.O_OBJECTS : _k.O_MASK].reshape(N_OBJECTS, len(OBJECT_FIELDS)),
+                buf[_k.O_MASK : _k.O_AEF],
+            )  # fmt: skip
+        eff = self.eff
+        if eff is None:
+            direction, foothold = np.zeros((4, 3)), self._feet().copy()
+            f_safe, p_safe, hit = np.ones(4, bool), np.ones(4, bool), np.full(4, -1, np.int64)
+        else:
+            direction, foothold = eff.direction, eff.foothold
+            f_safe, p_safe, hit = eff.foothold_safe, eff.path_safe, eff.hit
+        memory = self.effectivity.memory
+        k = len(memory)
+        if k > MEMORY_SLOTS:
+            centre = 0.5 * (memory[:, 0] + memory[:, 1])
+            dist = np.hypot(centre[:, 0] - torso[0], centre[:, 1] - torso[1])
+            keep = np.sort(np.argsort(dist, kind="stable")[:MEMORY_SLOTS])
+        else:
+            keep = self._arange[:k]
+        # The world axis (of +x, +y, -x, -y) nearest the heading is the boxes' length axis.
+        quarter = int(np.round(yaw / (0.5 * np.pi)))
+        rel_yaw = (0.5 * np.pi * quarter - yaw + np.pi) % (2 * np.pi) - np.pi
+        _k.observation_kernel(
+            d.qpos, d.qvel, r.qpos_adr, r.dof_adr, touch, d.xmat[r.torso_body],
+            self.generator.cpg.y, self.generator.pools.target, c, s, torso, d.site_xpos,
+            r.foot_site, d.xpos, r.hip_body, r.thigh_body, r.shank_body, direction, foothold,
+            f_safe, p_safe, hit, memory, keep, rel_yaw, quarter % 2 == 0,
+            np.array(best, dtype=np.float64), self._slot_scratch, buf, safe,
+        )  # fmt: skip
+        obs = {key: buf[a:b] for key, (a, b) in self._obs_proprio}
+        if self._perceive:
+            for key, (a, b) in self._obs_perceived:
+                obs[key] = buf[a:b]
+                if key == "foothold":
+                    obs["foothold_safe"] = safe
+        obs["feet"] = buf[_k.O_FEET : _k.O_LEG_JOINTS]
+        obs["leg_joints"] = buf[_k.O_LEG_JOINTS : _k.N_OBS]
         if self.privileged:
             obs["true_blocks"] = self._true_blocks(rot, torso)
         if self.include_graph:
@@ -576,44 +644,6 @@ class ObstacleEnv(QuadrupedEnv):
         if self._with_depth:
             obs["depth"] = self._depth_image.copy()  # the buffer changes with the next frame
         return obs
-
-    def _perception_obs(
-        self, obs: dict[str, np.ndarray], rot: np.ndarray, torso: np.ndarray, yaw: float
-    ) -> None:
-        """Add the keys built from the perception and the effectivity to ``obs``."""
-        objects, mask, (a_h, a_w, a_s) = self._objects(rot)
-        eff = self.eff
-        if eff is None:
-            direction = np.zeros((4, 3))
-            foothold = self._feet().copy()
-            foothold_safe = np.ones(4, np.int8)
-            meets = np.zeros(4, np.float32)
-            hit = np.full(4, -1, np.int64)
-        else:
-            direction = eff.direction
-            foothold = eff.foothold
-            foothold_safe = eff.foothold_safe.astype(np.int8)
-            meets = (~eff.path_safe).astype(np.float32)
-            hit = eff.hit
-        blocks, slot_of = self._remembered_blocks(rot, torso, yaw)
-        met = np.where(hit >= 0, slot_of[np.maximum(hit, 0)], -1).astype(np.float32)
-        # Fig. 7's 31 inputs: the object's size, the interrupt directions, joint angles, touch.
-        aef = np.empty(AEF_INPUTS, np.float32)
-        aef[0:3] = (a_h, a_w, a_s)
-        aef[3:15] = direction.ravel()
-        aef[15:27] = obs["joint_pos"]
-        aef[27:31] = obs["touch"]
-        obs.update(
-            objects=objects.ravel(),
-            objects_mask=mask,
-            aef_input=aef,
-            interrupt_direction=direction.astype(np.float32).ravel(),
-            foothold=_heading_frame(foothold, rot, torso).ravel(),
-            foothold_safe=foothold_safe,
-            path_meets_block=meets,
-            block_met=met,
-            remembered_blocks=blocks.ravel(),
-        )
 
     def _remembered_blocks(
         self, rot: np.ndarray, torso: np.ndarray, yaw: float
@@ -695,13 +725,6 @@ class ObstacleEnv(QuadrupedEnv):
             for marker in overlay_markers(self):
                 viewer.add_marker(**marker)
         return super().render()
-
-
-def _heading_frame(points: np.ndarray, rot: np.ndarray, torso: np.ndarray) -> np.ndarray:
-    """(N, 3) world points as float32: x, y from ``torso`` in the yaw frame ``rot``, z as is."""
-    out = (points - torso) @ rot.T
-    out[:, 2] = points[:, 2]
-    return out.astype(np.float32)
 
 
 def _env_perception(params: PipelineParams | None, tof: ToFArray) -> PipelineParams:

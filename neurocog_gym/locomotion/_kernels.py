@@ -228,3 +228,48 @@ def drive_kernel(
         )
         drive[a] = drive[a] + -lateral * protraction
         hip_drive[k] = y[joint_neurons[h, 0]] - y[joint_neurons[h, 1]]
+
+
+@njit(cache=True)
+def generator_cycle(
+    command, provision, a_prov, a_brake, brake_from,
+    x, v, W, V, touch, u0, b, tau, T, tau_f, dt_units, n_sub, y,
+    joint_neurons, g_flex, g_ext, sag_gain, dir_gain, dir_steer, cor_gain, cor_front_bias,
+    side, front, hip_joints, abduct_joints, drive, hip_drive, ramp,
+    q_ref, qd_ref, theta_int, theta, theta_dot, posture, mu1, mu2, acc_max, vel_max, fl_width,
+    fl_c, fv_K, fv_N, Z, k_rest, d_rest, q_lo, q_hi, dt, acc_out, coupling, joint_lo, joint_hi,
+    target_out,
+):  # pragma: no cover - compiled  # fmt: skip
+    """One control cycle of the whole generator (``LocomotionGenerator.step``) in one call.
+
+    The provision's low-pass filter (the brake's on s_SAG while it or its command is below
+    ``brake_from``), ``matsuoka_step`` into ``y``, ``drive_kernel``, the soft start's ``ramp``
+    factor on the drives (1.0 after the ramp: x * 1.0 is x), then ``motor_neuron_step``: the
+    same operations in the same order as the separate calls, so the same bits.
+
+    ``command`` (3,) is this cycle's walking provision, ``provision`` (3,) the filtered one
+    (updated in place), ``a_prov`` = dt / max(provision_tau, dt) and ``a_brake`` =
+    dt / max(brake_tau, dt) the filters' steps; ``x`` to ``y`` are ``matsuoka_step``'s
+    arguments with ``y`` (24,) its output, ``joint_neurons`` to ``hip_drive`` those of
+    ``drive_kernel``, and ``q_ref`` to ``target_out`` those of ``motor_neuron_step``
+    (``theta_int`` the interrupt, ``touch`` shared with the CPG).
+    """
+    braking = command[0] < brake_from or provision[0] < brake_from
+    before = provision[0]
+    for i in range(provision.shape[0]):
+        provision[i] += a_prov * (command[i] - provision[i])
+    if braking:
+        provision[0] = before + a_brake * (command[0] - before)
+    y[:] = matsuoka_step(x, v, W, V, touch, u0, b, tau, T, tau_f, dt_units, n_sub)
+    drive_kernel(
+        y, joint_neurons, g_flex, g_ext, provision, sag_gain, brake_from, dir_gain, dir_steer,
+        cor_gain, cor_front_bias, side, front, hip_joints, abduct_joints, drive, hip_drive,
+    )  # fmt: skip
+    if ramp != 1.0:
+        for j in range(drive.shape[0]):
+            drive[j] *= ramp
+    motor_neuron_step(
+        q_ref, qd_ref, drive, theta_int, theta, theta_dot, touch, posture, mu1, mu2, acc_max,
+        vel_max, fl_width, fl_c, fv_K, fv_N, Z, k_rest, d_rest, q_lo, q_hi, dt, acc_out, coupling,
+        joint_lo, joint_hi, target_out,
+    )  # fmt: skip

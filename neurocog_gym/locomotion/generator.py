@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from neurocog_gym.locomotion._kernels import drive_kernel
+from neurocog_gym.locomotion._kernels import drive_kernel, generator_cycle
 from neurocog_gym.locomotion.cpg import CPGParams, MatsuokaCPG
 from neurocog_gym.locomotion.gait import Gait
 from neurocog_gym.locomotion.motor import MotorNeuronPools, MotorParams
@@ -169,7 +169,7 @@ class LocomotionGenerator:
         )  # fmt: skip
 
     def step(self, provision, interrupt, theta, theta_dot, touch) -> np.ndarray:
-        """One control cycle.
+        """One control cycle (one compiled call, ``_kernels.generator_cycle``).
 
         Args:
             provision: (3,) walking provision (s_SAG, s_COR, s_DIR) in [-1, 1].
@@ -179,22 +179,27 @@ class LocomotionGenerator:
             touch: (4,) normalised touch inputs (1 ~ a quarter of the body weight).
 
         Returns:
-            (12,) servo position targets, rad.
+            (12,) servo position targets, rad (``pools.target``).
         """
         p = self.prov
-        command = np.asarray(provision, dtype=np.float64)
-        braking = command[0] < p.brake_from or self.provision[0] < p.brake_from
-        before = self.provision[0]
-        a = self.dt / max(p.provision_tau, self.dt)
-        self.provision += a * (command - self.provision)
-        if braking:
-            self.provision[0] = before + self.dt / max(p.brake_tau, self.dt) * (command[0] - before)
-        y = self.cpg.step(touch)
-        self._drive(y)
         self.elapsed += self.dt
-        if self.elapsed < self.prov.start_ramp:
-            self.drive *= self.elapsed / self.prov.start_ramp
-        return self.pools.step(self.drive, interrupt, theta, theta_dot, touch)
+        ramp = self.elapsed / p.start_ramp if self.elapsed < p.start_ramp else 1.0
+        cpg, pools, mp = self.cpg, self.pools, self.pools.params
+        cp = cpg.params
+        generator_cycle(
+            np.asarray(provision, dtype=np.float64), self.provision,
+            self.dt / max(p.provision_tau, self.dt), self.dt / max(p.brake_tau, self.dt),
+            p.brake_from, cpg.x, cpg.v, cpg.W, cpg.V, np.asarray(touch, dtype=np.float64),
+            cp.u0, cp.b, cp.tau, cp.T, cp.tau_f, cpg.dt / cp.time_unit / cp.substeps,
+            cp.substeps, cpg.y, _JOINT_NEURONS, self.g_flex, self.g_ext, p.sag_gain,
+            p.dir_gain, p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS,
+            ABDUCT_JOINTS, self.drive, self.hip_drive, ramp, pools.q_ref, pools.qd_ref,
+            np.asarray(interrupt, dtype=np.float64), theta, theta_dot, pools.posture, mp.mu1,
+            mp.mu2, pools.acc_max, pools.vel_max, pools.fl_width, mp.fl_c, mp.fv_K, mp.fv_N,
+            pools.Z, mp.k_rest, mp.d_rest, pools.q_lo, pools.q_hi, pools.dt, pools.acc,
+            pools.coupling, pools.joint_lo, pools.joint_hi, pools.target,
+        )  # fmt: skip
+        return pools.target
 
     @property
     def swinging(self) -> np.ndarray:

@@ -17,6 +17,7 @@ The pool keeps the pose each block was placed with (:attr:`ObstaclePool.placed_p
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -285,7 +286,7 @@ class ObstaclePool:
         pos, quat = self.poses(data)
         return [
             {**d, "pos": [_json_num(x) for x in p], "quat": [_json_num(x) for x in q]}
-            for d, p, q in zip(self._json, pos, quat, strict=True)
+            for d, p, q in zip(self._json, pos.tolist(), quat.tolist(), strict=True)
         ]
 
     def boxes(self, data: mujoco.MjData | None = None) -> np.ndarray:
@@ -340,7 +341,7 @@ class ObstaclePool:
 def _json_num(x: float) -> float | None:
     """``x`` rounded to 6 digits (1 um), None when not finite (a faulted simulation)."""
     x = float(x)
-    return round(x, 6) if np.isfinite(x) else None
+    return round(x, 6) if math.isfinite(x) else None
 
 
 @njit(cache=True)

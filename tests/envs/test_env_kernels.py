@@ -262,3 +262,106 @@ def test_knocked_when_moved_two_cm_or_turned_ten_degrees(shift, yaw, tilt_deg, k
     assert not _outcome_step(([], [], [], []), xpos, mat[None], q[None], state, placed)
     assert state[6][0] == knocked
     assert state[4][0] == pytest.approx(np.hypot(*shift))
+
+
+# -- heading-frame arithmetic and the fused per-cycle kernels ---------------------------------
+
+
+def _rot(yaw: float) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
+
+
+def test_heading_frame_arithmetic_is_numpys_bit_for_bit():
+    """The kernels' fused multiply-add sums give NumPy's (BLAS's) float64 results exactly."""
+    from numba import njit
+
+    from neurocog_gym.envs._kernels import _dot3_down, _dot3_up
+
+    @njit
+    def both(p, t, c, s, rot, out):
+        for i in range(p.shape[0]):
+            dx, dy, dz = p[i, 0] - t[0], p[i, 1] - t[1], p[i, 2] - t[2]
+            out[0, i, 0] = _dot3_up(c, s, 0.0, dx, dy, dz)
+            out[0, i, 1] = _dot3_up(-s, c, 0.0, dx, dy, dz)
+            out[1, i, 0] = _dot3_down(c, s, 0.0, dx, dy, dz)
+            out[1, i, 1] = _dot3_down(-s, c, 0.0, dx, dy, dz)
+            v = p[i]
+            for j in range(3):
+                out[2, i, j] = _dot3_up(rot[0, j], rot[1, j], rot[2, j], v[0], v[1], v[2])
+
+    rng = np.random.default_rng(0)
+    for trial in range(3000):
+        yaw = rng.uniform(-4.0, 4.0)
+        n = 2 + trial % 11
+        p = rng.normal(size=(n, 3)) * rng.uniform(0.01, 5.0)
+        t = rng.normal(size=3)
+        r = _rot(yaw)
+        m = rng.normal(size=(3, 3))
+        out = np.empty((3, n, 3))
+        both(p, t, r[0, 0], r[0, 1], m, out)
+        gemm = (p - t) @ r.T  # (N >= 2, 3) @ (3, 3): BLAS gemm
+        assert out[0, :, :2].tobytes() == gemm[:, :2].tobytes()
+        gemv = np.stack([r @ (x - t) for x in p])  # (3, 3) @ (3,): gemv
+        assert out[1, :, :2].tobytes() == gemv[:, :2].tobytes()
+        gemv_t = np.stack([m.T @ x for x in p])  # transposed gemv
+        assert out[2].tobytes() == gemv_t.tobytes()
+
+
+def test_outcome_cycle_is_the_two_kernels_and_the_pass_bounds():
+    """``outcome_cycle`` = block_outcome_step + step_over_step + ObstaclePool.boxes' far x."""
+    from neurocog_gym.envs._kernels import block_outcome_step, outcome_cycle, step_over_step
+
+    rng = np.random.default_rng(1)
+    nbody, ngeom, k = 6, 8, 3
+    for _ in range(200):
+        xpos = rng.normal(size=(nbody, 3))
+        quat = rng.normal(size=(nbody, 4))
+        quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+        xmat = np.empty((nbody, 9))
+        for b in range(nbody):
+            mujoco.mju_quat2Mat(xmat[b], quat[b])
+        body_ids = np.array([3, 4, 5, 0], np.int64)
+        half = rng.uniform(0.02, 0.2, size=(4, 3))
+        slot_of = np.array([-1, -1, -1, -1, 0, 1, 2, 3], np.int64)
+        is_robot = np.array([0, 1, 1, 1, 0, 0, 0, 0], bool)
+        nc = 5
+        geom = rng.integers(0, ngeom, size=(nc, 2)).astype(np.int32)
+        pos = rng.normal(size=(nc, 3))
+        frame = rng.normal(size=(nc, 9))
+        efc_address = np.arange(nc, dtype=np.int32) * 3
+        dim = np.full(nc, 3, np.int32)
+        efc_force = rng.uniform(0, 20, size=3 * nc)
+        feet = rng.normal(size=(4, 3))
+        prev = rng.normal(size=(4, 3))
+        heading = np.array([1.0, 0.0])
+        placed_pos, placed_quat = xpos[body_ids] + 0.01, quat[body_ids]
+        consts = (0.8, 0.01, 5.0, 3, 0.02, np.cos(np.radians(5.0)))
+
+        def state():
+            return [np.zeros(4, bool), np.zeros(4), np.zeros(4, np.int64), np.zeros(4, bool),
+                    np.zeros(4), np.zeros(4), np.zeros(4, bool)]  # fmt: skip
+
+        contacts = (geom, pos, frame, efc_address, dim, efc_force, False, slot_of, is_robot, k,
+                    body_ids, xpos, xmat, quat, half, placed_pos, placed_quat)  # fmt: skip
+        a, b = state(), state()
+        over_a = (np.ones(4), np.full((4, 4), -1, np.int8), np.zeros((4, 4), bool))
+        over_b = (np.ones(4), np.full((4, 4), -1, np.int8), np.zeros((4, 4), bool))
+        is_front = np.array([True, True, False, False])
+        over = np.zeros(4, bool)
+        hit = block_outcome_step(*contacts, *consts, *a)
+        step_over_step(feet, prev.copy(), True, heading, k, body_ids, xpos, xmat, half, *over_a)
+        prev_b = prev.copy()
+        res = outcome_cycle(*contacts, *consts, *b, feet, prev_b, True, heading, *over_b,
+                            is_front, over)  # fmt: skip
+        for x, y in zip(a + list(over_a), b + list(over_b), strict=True):
+            assert x.tobytes() == y.tobytes()
+        ids = body_ids[:k]
+        ext = np.einsum("kij,kj->ki", np.abs(xmat[ids].reshape(k, 3, 3)), half[:k])
+        far = float((xpos[ids] + ext)[:, 0].max())
+        c = over_b[2][:k]
+        expect_over = c[:, is_front].any(axis=1) & c[:, ~is_front].any(axis=1)
+        assert res[0] == hit and res[1] == a[6][:k].any() and res[2] == a[3][:k].any()
+        assert res[3] == far and res[4] == feet[:, 0].min()
+        assert (over[:k] == expect_over).all()
+        assert prev_b.tobytes() == feet.tobytes()

@@ -67,3 +67,41 @@ def test_a_brake_command_is_followed_fast_and_a_slow_down_slowly():
     gen.reset(np.random.default_rng(0))
     gen.step(np.array([-0.3, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
     assert gen.provision[0] == pytest.approx(-0.3 * 0.01 / p.provision_tau)
+
+
+def test_the_compiled_cycle_is_the_separate_steps_bit_for_bit():
+    """``LocomotionGenerator.step`` (one call) against the CPG, drive and pool steps in turn."""
+    gait = default_gait()
+    lo, hi = np.full(12, -2.5), np.full(12, 2.5)
+    kb = np.array([True, False, True, False])
+    fused = LocomotionGenerator(gait, lo, hi, dt=0.01, knee_behind=kb)
+    ref = LocomotionGenerator(gait, lo, hi, dt=0.01, knee_behind=kb)
+    rng = np.random.default_rng(3)
+    fused.reset(np.random.default_rng(0))
+    ref.reset(np.random.default_rng(0))
+    for i in range(300):  # through the 1 s soft start and past it
+        provision = rng.uniform(-1, 1, 3) if i % 3 else np.array([-0.9, 0.2, 0.0])
+        interrupt = rng.uniform(-1, 1, 12) * (i % 5 == 0)
+        theta, theta_dot = rng.normal(size=12), rng.normal(size=12)
+        touch = rng.uniform(0, 2, 4)
+        out = fused.step(provision, interrupt, theta, theta_dot, touch).copy()
+        # The separate steps, as LocomotionGenerator.step ran them before the fused kernel.
+        p = ref.prov
+        command = np.asarray(provision, dtype=np.float64)
+        braking = command[0] < p.brake_from or ref.provision[0] < p.brake_from
+        before = ref.provision[0]
+        a = ref.dt / max(p.provision_tau, ref.dt)
+        ref.provision += a * (command - ref.provision)
+        if braking:
+            ref.provision[0] = before + ref.dt / max(p.brake_tau, ref.dt) * (command[0] - before)
+        y = ref.cpg.step(touch)
+        ref._drive(y)
+        ref.elapsed += ref.dt
+        if ref.elapsed < p.start_ramp:
+            ref.drive *= ref.elapsed / p.start_ramp
+        expect = ref.pools.step(ref.drive, interrupt, theta, theta_dot, touch)
+        assert out.tobytes() == expect.tobytes()
+        for name in ("provision", "drive", "hip_drive"):
+            assert getattr(fused, name).tobytes() == getattr(ref, name).tobytes()
+        assert fused.cpg.x.tobytes() == ref.cpg.x.tobytes()
+        assert fused.pools.qd_ref.tobytes() == ref.pools.qd_ref.tobytes()
