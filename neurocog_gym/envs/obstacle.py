@@ -218,6 +218,7 @@ class ObstacleEnv(QuadrupedEnv):
         self._init_outcome_state()
         self._arange = np.arange(self.effectivity.memory_capacity, dtype=np.int64)
         self._slot_scratch = np.empty(self.effectivity.memory_capacity, np.int64)
+        self._no_best = np.zeros(3)  # A_h, A_w, A_s without an object (read only)
         k = _k
         # (key, (start, stop)) in the observation buffer, in the observation's key order.
         self._obs_proprio = (
@@ -590,17 +591,20 @@ class ObstacleEnv(QuadrupedEnv):
         d, r = self.data, self.robot
         yaw = self._yaw() if self._yaw_now is None else self._yaw_now
         c, s = np.cos(yaw), np.sin(yaw)
-        rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
+        rot = None  # the yaw frame as a matrix, built only for what needs it
         torso = d.xpos[r.torso_body]
         touch = self.touch() if self._touch_now is None else self._touch_now
         buf = np.zeros(_k.N_OBS, np.float32)
         safe = np.empty(4, np.int8)
-        best = (0.0, 0.0, 0.0)
-        if self._perceive:
+        best = self._no_best
+        aff = self.pipeline.last
+        if self._perceive and aff is not None and aff.objects:
+            rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
             _, _, best = self._objects(
                 rot, buf[_k.O_OBJECTS : _k.O_MASK].reshape(N_OBJECTS, len(OBJECT_FIELDS)),
                 buf[_k.O_MASK : _k.O_AEF],
             )  # fmt: skip
+            best = np.array(best, dtype=np.float64)
         eff = self.eff
         if eff is None:
             direction, foothold = np.zeros((4, 3)), self._feet().copy()
@@ -617,14 +621,14 @@ class ObstacleEnv(QuadrupedEnv):
         else:
             keep = self._arange[:k]
         # The world axis (of +x, +y, -x, -y) nearest the heading is the boxes' length axis.
-        quarter = int(np.round(yaw / (0.5 * np.pi)))
+        quarter = round(yaw / (0.5 * np.pi))  # half to even, as np.round
         rel_yaw = (0.5 * np.pi * quarter - yaw + np.pi) % (2 * np.pi) - np.pi
         _k.observation_kernel(
             d.qpos, d.qvel, r.qpos_adr, r.dof_adr, touch, d.xmat[r.torso_body],
             self.generator.cpg.y, self.generator.pools.target, c, s, torso, d.site_xpos,
             r.foot_site, d.xpos, r.hip_body, r.thigh_body, r.shank_body, direction, foothold,
-            f_safe, p_safe, hit, memory, keep, rel_yaw, quarter % 2 == 0,
-            np.array(best, dtype=np.float64), self._slot_scratch, buf, safe,
+            f_safe, p_safe, hit, memory, keep, rel_yaw, quarter % 2 == 0, best,
+            self._slot_scratch, buf, safe,
         )  # fmt: skip
         obs = {key: buf[a:b] for key, (a, b) in self._obs_proprio}
         if self._perceive:
@@ -635,6 +639,8 @@ class ObstacleEnv(QuadrupedEnv):
         obs["feet"] = buf[_k.O_FEET : _k.O_LEG_JOINTS]
         obs["leg_joints"] = buf[_k.O_LEG_JOINTS : _k.N_OBS]
         if self.privileged:
+            if rot is None:
+                rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
             obs["true_blocks"] = self._true_blocks(rot, torso)
         if self.include_graph:
             g = self.pipeline.net.padded(self.graph_max_nodes, self.graph_max_edges)
@@ -670,7 +676,7 @@ class ObstacleEnv(QuadrupedEnv):
             dist = np.hypot(centre[:, 0] - torso[0], centre[:, 1] - torso[1])
             keep = np.sort(np.argsort(dist, kind="stable")[:MEMORY_SLOTS])
         # The world axis (of +x, +y, -x, -y) nearest the heading is the boxes' length axis.
-        quarter = int(np.round(yaw / (0.5 * np.pi)))
+        quarter = round(yaw / (0.5 * np.pi))  # half to even, as np.round
         axis = 0.5 * np.pi * quarter
         rel_yaw = (axis - yaw + np.pi) % (2 * np.pi) - np.pi
         along_x = quarter % 2 == 0

@@ -284,8 +284,14 @@ class ObstaclePool:
         if self._json is None:
             self._json = [b.to_json() for b in self.blocks]
         pos, quat = self.poses(data)
+        # Rounded to 6 digits (1 um), None when not finite (a faulted simulation).
+        fin = math.isfinite
         return [
-            {**d, "pos": [_json_num(x) for x in p], "quat": [_json_num(x) for x in q]}
+            {
+                **d,
+                "pos": [round(x, 6) if fin(x) else None for x in p],
+                "quat": [round(x, 6) if fin(x) else None for x in q],
+            }
             for d, p, q in zip(self._json, pos.tolist(), quat.tolist(), strict=True)
         ]
 
@@ -336,12 +342,6 @@ class ObstaclePool:
         is_robot = self.robot_mask(robot_geoms)
         # (n, 2) geom ids of each contact
         return _touching_kernel(data.contact.geom[:n], self._slot_of, is_robot, len(hit), hit)
-
-
-def _json_num(x: float) -> float | None:
-    """``x`` rounded to 6 digits (1 um), None when not finite (a faulted simulation)."""
-    x = float(x)
-    return round(x, 6) if math.isfinite(x) else None
 
 
 @njit(cache=True)
