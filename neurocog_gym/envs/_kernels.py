@@ -39,14 +39,24 @@ def fault_check(qpos, qvel, warning_number, fault_ids, seen, vel_limit):  # prag
 
 
 @njit(cache=True)
-def clip_action(action, out):  # pragma: no cover - compiled
-    """``out[:] = clip(action, -1, 1)`` as float64; False (``out`` partly written) on a NaN/inf."""
+def clip_action_groups(action, out, n_first):  # pragma: no cover - compiled
+    """``out[:] = clip(action, -1, 1)`` as float64, and which output groups it uses.
+
+    Returns:
+        -1 (``out`` partly written) on a NaN or inf; else bit 0 set when an entry below
+        ``n_first`` is non-zero and bit 1 when one from ``n_first`` on is (``a[:n].any()``,
+        ``a[n:].any()`` of the clipped action).
+    """
+    groups = 0
     for i in range(action.shape[0]):
         x = action[i]
         if not math.isfinite(x):
-            return False
-        out[i] = min(max(x, -1.0), 1.0)
-    return True
+            return -1
+        y = min(max(x, -1.0), 1.0)
+        out[i] = y
+        if y != 0.0:
+            groups |= 1 if i < n_first else 2
+    return groups
 
 
 @njit(cache=True)

@@ -18,7 +18,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 from gymnasium.utils import EzPickle
 
 from neurocog_gym import paths
-from neurocog_gym.envs._kernels import abs_power, clip_action, fault_check
+from neurocog_gym.envs._kernels import abs_power, clip_action_groups, fault_check
 from neurocog_gym.locomotion.gait import Gait, default_gait
 from neurocog_gym.locomotion.generator import LocomotionGenerator
 from neurocog_gym.robot.model import FAULT_WARNINGS, GRAVITY, RobotIndex
@@ -119,6 +119,8 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         self.observation_space = spaces.Dict(self._observation_spaces())
         self._power = 0.0
         self._warnings_seen = 0
+        self._action_groups = 0
+        """Of the last checked action: bit 0 a non-zero interrupt, bit 1 a non-zero provision."""
 
     # -- spaces -------------------------------------------------------------------------------
 
@@ -207,7 +209,9 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         ):
             # The common case, checked and clipped in one compiled pass.
             a = np.empty(ACTION_DIM)
-            if clip_action(action, a):
+            groups = clip_action_groups(action, a, N_INTERRUPT)
+            if groups >= 0:
+                self._action_groups = groups
                 return a
         a = np.asarray(action)
         if a.shape != (ACTION_DIM,):
@@ -222,7 +226,9 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         if bad.any():
             raise ValueError(f"action entries {np.flatnonzero(bad).tolist()} are NaN or inf")
         # Out-of-range values are clipped to [-1, 1] (documented in the env docstring).
-        return np.clip(a, -1.0, 1.0)
+        a = np.clip(a, -1.0, 1.0)
+        self._action_groups = clip_action_groups(a, np.empty(ACTION_DIM), N_INTERRUPT)
+        return a
 
     def _warning_count(self) -> int:
         return int(sum(w.number for w in self._warn_stats))

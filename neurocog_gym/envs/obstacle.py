@@ -416,6 +416,7 @@ class ObstacleEnv(QuadrupedEnv):
 
     def _reset_outcome(self) -> None:
         self._serial_seen = self.pool.serial.copy()
+        self._placements_seen = self.pool.placements
         for k in range(self.pool.capacity):
             self._reset_slot(k)
         self._has_prev_feet = False
@@ -445,10 +446,11 @@ class ObstacleEnv(QuadrupedEnv):
         k = len(pool.blocks)
         touching = False
         if k:
-            if not np.array_equal(pool.serial, self._serial_seen):
+            if pool.placements != self._placements_seen:
                 for slot in np.flatnonzero(pool.serial != self._serial_seen):
                     self._reset_slot(int(slot))
                 self._serial_seen = pool.serial.copy()
+                self._placements_seen = pool.placements
             n, con = d.ncon, d.contact
             p = self.outcome_params
             touching, knocked, stood, self._far_x, self._rear_foot = _k.outcome_cycle(
@@ -478,9 +480,11 @@ class ObstacleEnv(QuadrupedEnv):
     def _before_control(self, interrupt: np.ndarray, provision: np.ndarray) -> None:
         """Count the cycles whose (clipped) action used each output group."""
         super()._before_control(interrupt, provision)
-        if interrupt.any():
+        # ``_check_action`` found them while clipping (``interrupt.any()``, ``provision.any()``).
+        groups = self._action_groups
+        if groups & 1:
             self.interrupt_cycles += 1
-        if provision.any():
+        if groups & 2:
             self.provision_cycles += 1
 
     def _task_event(self) -> None:

@@ -157,6 +157,8 @@ class ObstaclePool:
         self._placed_pos = np.zeros((n, 3))
         self._placed_quat = np.zeros((n, 4))
         self.serial = np.zeros(n, dtype=np.int64)
+        self.placements = 0
+        """Blocks placed so far (the sum of ``serial``): unchanged means no slot changed."""
         self._data: mujoco.MjData | None = None
         self._json: list[dict] | None = None
         self.blocks: list[Block] = []
@@ -259,6 +261,7 @@ class ObstaclePool:
         self._placed_pos[slot] = block.center
         self._placed_quat[slot] = quat
         self.serial[slot] += 1
+        self.placements += 1
 
     def poses(self, data: mujoco.MjData | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Current poses of the placed blocks.

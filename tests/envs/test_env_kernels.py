@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from neurocog_gym.envs._kernels import abs_power, clip_action, fault_check
+from neurocog_gym.envs._kernels import abs_power, clip_action_groups, fault_check
 from neurocog_gym.envs.base import _as_slice
 from neurocog_gym.robot.obstacles import _touching_kernel
 
@@ -46,17 +46,20 @@ def test_clip_action_matches_numpy(dtype):
     for _ in range(200):
         a = (rng.normal(size=15) * 2).astype(dtype)
         a[rng.integers(15)] = -0.0
+        if rng.random() < 0.3:
+            a[rng.integers(2) * 12 :][:12] = 0.0  # one group all zero
         out = np.empty(15)
-        assert clip_action(a, out)
+        groups = clip_action_groups(a, out, 12)
         expect = np.minimum(np.maximum(a.astype(np.float64), -1.0), 1.0)
         assert out.tobytes() == expect.tobytes()
+        assert groups == int(expect[:12].any()) + 2 * int(expect[12:].any())
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
 def test_clip_action_refuses_non_finite(bad):
     a = np.zeros(15, np.float32)
     a[4] = bad
-    assert not clip_action(a, np.empty(15))
+    assert clip_action_groups(a, np.empty(15), 12) == -1
 
 
 @pytest.mark.parametrize("n", [8, 12, 15, 16, 23, 64, 128])
