@@ -137,6 +137,7 @@ class LocomotionGenerator:
         self.drive = np.zeros(12)
         self.hip_drive = np.zeros(4)
         self.elapsed = 0.0
+        self._cycle_key = None
 
     def reset(self, rng: np.random.Generator | None = None, noise: float = 0.05) -> None:
         """Reset to the standing posture with the CPG started in a trot phase.
@@ -184,22 +185,46 @@ class LocomotionGenerator:
         p = self.prov
         self.elapsed += self.dt
         ramp = self.elapsed / p.start_ramp if self.elapsed < p.start_ramp else 1.0
-        cpg, pools, mp = self.cpg, self.pools, self.pools.params
-        cp = cpg.params
+        cpg, pools = self.cpg, self.pools
+        key = self._cycle_key
+        if (
+            key is None or key[0] is not p or key[1] is not cpg or key[2] is not pools
+            or key[3] is not cpg.params or key[4] is not pools.params
+        ):  # fmt: skip
+            self._cycle_key = (p, cpg, pools, cpg.params, pools.params)
+            self._cycle_args = self._constant_args()
+        first, second = self._cycle_args
         generator_cycle(
-            np.asarray(provision, dtype=np.float64), self.provision,
+            np.asarray(provision, dtype=np.float64), self.provision, *first,
+            np.asarray(touch, dtype=np.float64), *second, ramp, pools.q_ref, pools.qd_ref,
+            np.asarray(interrupt, dtype=np.float64), theta, theta_dot, *self._pool_args,
+        )  # fmt: skip
+        return pools.target
+
+    def _constant_args(self) -> tuple[tuple, tuple]:
+        """``generator_cycle``'s arguments that stay between cycles (parameters, buffers).
+
+        Rebuilt when a parameter set, the CPG or the pools are replaced; their buffers are only
+        ever written in place.
+        """
+        p, cpg, pools = self.prov, self.cpg, self.pools
+        cp, mp = cpg.params, pools.params
+        self._pool_args = (
+            pools.posture, mp.mu1, mp.mu2, pools.acc_max, pools.vel_max, pools.fl_width,
+            mp.fl_c, mp.fv_K, mp.fv_N, pools.Z, mp.k_rest, mp.d_rest, pools.q_lo, pools.q_hi,
+            pools.dt, pools.acc, pools.coupling, pools.joint_lo, pools.joint_hi, pools.target,
+        )  # fmt: skip
+        first = (
             self.dt / max(p.provision_tau, self.dt), self.dt / max(p.brake_tau, self.dt),
-            p.brake_from, cpg.x, cpg.v, cpg.W, cpg.V, np.asarray(touch, dtype=np.float64),
+            p.brake_from, cpg.x, cpg.v, cpg.W, cpg.V,
+        )  # fmt: skip
+        second = (
             cp.u0, cp.b, cp.tau, cp.T, cp.tau_f, cpg.dt / cp.time_unit / cp.substeps,
             cp.substeps, cpg.y, _JOINT_NEURONS, self.g_flex, self.g_ext, p.sag_gain,
             p.dir_gain, p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS,
-            ABDUCT_JOINTS, self.drive, self.hip_drive, ramp, pools.q_ref, pools.qd_ref,
-            np.asarray(interrupt, dtype=np.float64), theta, theta_dot, pools.posture, mp.mu1,
-            mp.mu2, pools.acc_max, pools.vel_max, pools.fl_width, mp.fl_c, mp.fv_K, mp.fv_N,
-            pools.Z, mp.k_rest, mp.d_rest, pools.q_lo, pools.q_hi, pools.dt, pools.acc,
-            pools.coupling, pools.joint_lo, pools.joint_hi, pools.target,
+            ABDUCT_JOINTS, self.drive, self.hip_drive,
         )  # fmt: skip
-        return pools.target
+        return first, second
 
     @property
     def swinging(self) -> np.ndarray:
