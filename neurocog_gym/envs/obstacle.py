@@ -204,6 +204,7 @@ class ObstacleEnv(QuadrupedEnv):
         self.warmup_cycles = int(warmup_cycles)
         self.observation_space = spaces.Dict(self._observation_spaces())
         self._foot_ix = _as_slice(self.robot.foot_site)
+        self._hip_ix = _as_stride(self.robot.hip_body)
         self.frame = None
         self._frame_origin = None
         self._boxes_source = self._boxes_cache = None
@@ -335,9 +336,9 @@ class ObstacleEnv(QuadrupedEnv):
         # Read once per cycle and kept for the observation (nothing moves the robot in between).
         self._yaw_now = self._yaw() if yaw is None else yaw
         self._touch_now = self.touch() if touch is None else touch
-        # Fancy indexing already copies feet and hips; the kernel only reads v_body.
+        # Views (the hips are every third body): the kernel only reads them.
         self.eff = self.effectivity.step(
-            d.time, self._touch_now, self._feet(), d.xpos[self.robot.hip_body],
+            d.time, self._touch_now, self._feet(), d.xpos[self._hip_ix],
             self._yaw_now, d.qvel[0:3], self.perceived_boxes(),
         )  # fmt: skip
 
@@ -735,6 +736,16 @@ class ObstacleEnv(QuadrupedEnv):
             for marker in overlay_markers(self):
                 viewer.add_marker(**marker)
         return super().render()
+
+
+def _as_stride(index: np.ndarray) -> slice | np.ndarray:
+    """``index`` as a slice when it is an increasing arithmetic progression, else unchanged."""
+    index = np.asarray(index)
+    if index.ndim == 1 and len(index) > 1:
+        step = int(index[1] - index[0])
+        if step > 0 and (np.diff(index) == step).all():
+            return slice(int(index[0]), int(index[-1]) + 1, step)
+    return _as_slice(index)
 
 
 def _env_perception(params: PipelineParams | None, tof: ToFArray) -> PipelineParams:

@@ -144,6 +144,9 @@ class ObstaclePool:
         if not self.bodies:
             raise ValueError("the scene has no obstacle bodies (obstacle_0, ...)")
         self.body_ids = np.array(self.bodies, dtype=np.int64)
+        # First body of the slots when they are consecutive bodies (read as a slice), else -1.
+        run = bool((np.diff(self.body_ids) == 1).all())
+        self._first_body = int(self.body_ids[0]) if run else -1
         self.geom_ids = np.array(self.geoms)
         self.qpos_adr = np.array(qadr, dtype=np.int64)
         self.dof_adr = np.array(dadr, dtype=np.int64)
@@ -286,7 +289,12 @@ class ObstaclePool:
         """
         if self._json is None:
             self._json = [b.to_json() for b in self.blocks]
-        pos, quat = self.poses(data)
+        k, b0 = len(self.blocks), self._first_body
+        state = self._data if data is None else data
+        if b0 >= 0 and state is not None:
+            pos, quat = state.xpos[b0 : b0 + k], state.xquat[b0 : b0 + k]  # views: no copies
+        else:
+            pos, quat = self.poses(data)
         # Rounded to 6 digits (1 um), None when not finite (a faulted simulation).
         fin = math.isfinite
         return [

@@ -368,3 +368,15 @@ def test_outcome_cycle_is_the_two_kernels_and_the_pass_bounds():
         assert res[3] == far and res[4] == feet[:, 0].min()
         assert (over[:k] == expect_over).all()
         assert prev_b.tobytes() == feet.tobytes()
+
+
+def test_as_stride_for_arithmetic_progressions():
+    from neurocog_gym.envs.obstacle import _as_stride
+
+    assert _as_stride(np.array([2, 5, 8, 11])) == slice(2, 12, 3)
+    assert _as_stride(np.array([4, 5, 6])) == slice(4, 7, 1)
+    assert _as_stride(np.array([7])) == slice(7, 8)
+    for index in ([2, 5, 9], [5, 3, 1], [3, 3]):
+        assert (_as_stride(np.array(index)) == np.array(index)).all()
+    x = np.arange(45.0).reshape(15, 3)
+    assert (x[_as_stride(np.array([2, 5, 8, 11]))] == x[[2, 5, 8, 11]]).all()
