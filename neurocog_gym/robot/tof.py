@@ -259,6 +259,7 @@ class ToFArray:
         self._points = np.zeros((s * n, 3), dtype=np.float32)
         self._origins = np.zeros((s, 3))
         self._counts = np.zeros(s, dtype=np.int64)
+        self._views: tuple[np.ndarray, ...] | None = None  # read-only views (``sense``)
         self._noisy = p.noise_std_rel > 0.0 or p.dropout > 0.0
 
         # numba backend: the ray-visible geoms (geom groups are read here, once; alphas, sizes
@@ -405,23 +406,31 @@ class ToFArray:
             self._origins,
             self._counts,
         )
-        shape = (p.n_sensors, p.height, p.width)
-        arrays = (
-            self._points[:total],
-            self._depth.reshape(shape),
-            self._valid.reshape(shape),
-            self._geomid.reshape(shape),
-            self._origins,
-            self._counts,
-        )
         if copy:
-            arrays = tuple(a.copy() for a in arrays)
-        else:
-            # Views of the buffers: read-only, so that only the next frame changes them.
-            arrays = tuple(a.view() for a in arrays)
-            for a in arrays:
+            shape = (p.n_sensors, p.height, p.width)
+            arrays = (
+                self._points[:total],
+                self._depth.reshape(shape),
+                self._valid.reshape(shape),
+                self._geomid.reshape(shape),
+                self._origins,
+                self._counts,
+            )
+            return ToFFrame(*(a.copy() for a in arrays), time=float(data.time))
+        # Views of the buffers: read-only, so that only the next frame changes them. The
+        # buffers never move, so the fixed-size views are made once and shared by the frames.
+        points = self._points[:total]
+        points.flags.writeable = False
+        if self._views is None:
+            shape = (p.n_sensors, p.height, p.width)
+            views = (
+                self._depth.reshape(shape), self._valid.reshape(shape),
+                self._geomid.reshape(shape), self._origins.view(), self._counts.view(),
+            )  # fmt: skip
+            for a in views:
                 a.flags.writeable = False
-        return ToFFrame(*arrays, time=float(data.time))
+            self._views = views
+        return ToFFrame(points, *self._views, time=float(data.time))
 
 
 # ---------------------------------------------------------------------------------------------
