@@ -156,38 +156,50 @@ class SuddenObstacleEnv(ObstacleEnv):
         self.appear_swing_phase = None
         self.appear_foothold = None
         self.rejected_swings = 0
-        self._front_down = np.ones(2, dtype=bool)
-        # Last lift-off of each front leg (s), NaN while it is on the ground; and which of them
-        # (index into FRONT_LEGS) has its appear_delay running, -1 for none.
-        self._lift_at = np.full(2, np.nan)
+        # Per front leg (lists: this runs every cycle until the block appears, on two values):
+        # on the ground at the last cycle; its last lift-off (s), NaN while it is on the
+        # ground; and which of them (index into FRONT_LEGS) has its appear_delay running, -1
+        # for none.
+        self._front_down = [True] * len(FRONT_LEGS)
+        self._lift_at = [math.nan] * len(FRONT_LEGS)
         self._pending = -1
 
     def _task_event(self) -> None:
         if self.appeared_at is not None:
             return  # one sudden obstacle per episode
-        front = list(FRONT_LEGS)
-        touch = self._touch_now  # read at the start of this cycle's _after_physics
-        down = touch[front] > self.effectivity.p.touch_off
+        front = FRONT_LEGS
+        # This cycle's touch, read at the start of its _after_physics.
+        all_touch = self._touch_now.tolist()
+        touch = [all_touch[leg] for leg in front]
+        off = self.effectivity.p.touch_off
+        down = [x > off for x in touch]
         # A lift-off is the sole unloading while the CPG swings that leg: the touch signal alone
         # also drops for a cycle in mid-stance (a planted foot's contact flickers), and half of
         # such drops were not followed by a lift (measured: 51 % of bare touch drops, 95 % of
         # drops in the CPG's swing phase, lift the foot > 3 cm within 0.08 s).
-        swinging = self.generator.swinging[front]
-        lifted = self._front_down & ~down & swinging
+        hip = self.generator.hip_drive.tolist()
+        swinging = [hip[leg] > 0.0 for leg in front]  # generator.swinging[front]
+        lifted = [
+            a and not b and c for a, b, c in zip(self._front_down, down, swinging, strict=True)
+        ]
         self._front_down = down
         t = float(self.data.time)
-        self._lift_at[lifted] = t
-        self._lift_at[down] = np.nan  # on the ground: that swing is over
+        lift_at = self._lift_at
+        for i, (up, on_ground) in enumerate(zip(lifted, down, strict=True)):
+            if up:
+                lift_at[i] = t
+            elif on_ground:
+                lift_at[i] = math.nan  # on the ground: that swing is over
         if t < self.appear_after:
             return
-        if self._pending >= 0 and np.isnan(self._lift_at[self._pending]):
+        if self._pending >= 0 and math.isnan(lift_at[self._pending]):
             self._pending = -1  # it touched down within appear_delay: no swing to meet
-        if self._pending < 0 and lifted.any():
-            self._pending = int(np.flatnonzero(lifted)[0])
+        if self._pending < 0 and True in lifted:
+            self._pending = lifted.index(True)
         if self._pending >= 0:
             # §6.2: the block appears about 0.1 s after the front leg's swing starts. (The 1e-9
             # absorbs the rounding of a time summed from physics steps.)
-            if t - self._lift_at[self._pending] < self.appear_delay - 1e-9:
+            if t - lift_at[self._pending] < self.appear_delay - 1e-9:
                 return
             leg = FRONT_LEGS[self._pending]
             self._pending = -1
@@ -195,14 +207,14 @@ class SuddenObstacleEnv(ObstacleEnv):
         elif t >= self.appear_after + self.appear_deadline:
             # No lift-off by the deadline: the block appears anyway, before the leg the CPG
             # swings, else before the less loaded front leg.
-            if swinging.any():
-                leg = FRONT_LEGS[int(np.flatnonzero(swinging)[0])]
+            if True in swinging:
+                leg = FRONT_LEGS[swinging.index(True)]
             else:
-                leg = FRONT_LEGS[int(np.argmin(touch[front]))]
+                leg = FRONT_LEGS[int(np.argmin(touch))]
             forced = True
         else:
             return
-        lift = self._lift_at[front.index(leg)]
+        lift = lift_at[front.index(leg)]
         for _ in range(self.placement_tries):
             for b in self._draw_blocks(leg):
                 self.pool.add(self.model, self.data, b)
