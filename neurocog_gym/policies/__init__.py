@@ -10,6 +10,8 @@ file, as ``--policy`` does:
   process disabled", Fig. 16b);
 * :class:`OraclePolicy` (``oracle.py``; ``oracle``) — the privileged scripted step-over that
   reads the true block boxes (make its env with ``privileged=True``); keeps per-episode state;
+* :class:`FootingOracle` (``footing.py``; used by ``oracle`` on the stepping stones) — the
+  privileged scripted footing-position interrupt that reads the true stones;
 * :class:`SB3Policy` (``sb3.py``; ``ppo`` and any ``.zip``) — a saved stable-baselines3 model.
 
 ``base.py`` holds what they share: the action's size and :func:`start_episode` (calls a stateful
@@ -19,6 +21,7 @@ policy's ``reset`` after every ``env.reset``). No policy reads the env beyond it
 from neurocog_gym.policies.aef import AEFPolicy
 from neurocog_gym.policies.base import ACTION_DIM, start_episode
 from neurocog_gym.policies.blind import BlindPolicy
+from neurocog_gym.policies.footing import FootingOracle, FootingParams
 from neurocog_gym.policies.oracle import OracleParams, OraclePolicy
 from neurocog_gym.policies.registry import POLICY_NAMES, make_policy
 from neurocog_gym.policies.sb3 import SB3Policy, shipped_ppo_env, vecnormalize_path
@@ -28,6 +31,8 @@ __all__ = [
     "POLICY_NAMES",
     "AEFPolicy",
     "BlindPolicy",
+    "FootingOracle",
+    "FootingParams",
     "OracleParams",
     "OraclePolicy",
     "SB3Policy",

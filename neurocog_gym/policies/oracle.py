@@ -34,6 +34,11 @@ far face is still ahead of the sole. If it does:
   over it from its onset.
 
 A leg is released after ``max_hold`` seconds whatever its state.
+
+On ``NeuroCog/SteppingStones-v1`` (an observation with ``true_stones``) there are no blocks to
+step over: the policy hands the observation to
+:class:`~neurocog_gym.policies.footing.FootingOracle`, the footing-position interrupt onto the
+true stones.
 """
 
 from __future__ import annotations
@@ -43,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from neurocog_gym.policies.base import ACTION_DIM
+from neurocog_gym.policies.footing import FootingOracle
 
 IDLE, LIFT, CARRY, DROP, APPROACH, LAND = 0, 1, 2, 3, 4, 5
 
@@ -112,6 +118,7 @@ class OraclePolicy:
 
     def __init__(self, params: OracleParams | None = None):
         self.p = params or OracleParams()
+        self.footing = FootingOracle()
         self.reset()
 
     def reset(self, env=None) -> None:
@@ -120,9 +127,12 @@ class OraclePolicy:
         self.held = np.zeros(4)
         self.block = np.full(4, -1, dtype=np.int64)
         self.swing_t = np.full(4, np.inf)
+        self.footing.reset(env)
 
     def __call__(self, obs) -> np.ndarray:
         """The action for one observation of an obstacle env made with ``privileged=True``."""
+        if "true_stones" in obs:
+            return self.footing(obs)
         if "true_blocks" not in obs:
             raise KeyError(
                 "OraclePolicy needs the privileged observation: make the env with "

@@ -25,7 +25,8 @@ def make_policy(spec: str):
       only the walking provision acts;
     * ``"blind"``: :class:`BlindPolicy`;
     * ``"oracle"``: :class:`OraclePolicy`, the privileged scripted step-over (reads the true
-      block boxes: make its env with ``privileged=True``);
+      block boxes: make its env with ``privileged=True``); on the stepping stones it runs
+      :class:`~neurocog_gym.policies.footing.FootingOracle` (reads the true stones);
     * ``"ppo"``: the shipped stable-baselines3 PPO policy (:class:`SB3Policy` on
       ``assets/ppo_sudden/model.zip`` and its observation statistics): cloned from the AEF,
       then 35 min of PPO on ``SuddenObstacle-v0`` (``assets/ppo_sudden/args.json``,
