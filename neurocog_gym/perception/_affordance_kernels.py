@@ -1519,7 +1519,8 @@ M_L1 = 6
 M_SPACING = 7
 M_VIEW = 8
 M_BOX = 9  # 9..14: min x, y, z, max x, y, z of the group's nodes
-N_MAP_COLS = 15
+M_HBOX = 15  # 15..18: min x, y, max x, y of the group's high nodes
+N_MAP_COLS = 19
 
 
 @njit(cache=True, nogil=True)
@@ -1534,7 +1535,8 @@ def map_objects_kernel(
     walking direction; the spacing is the median horizontal length of the graph edges that
     join two high nodes of the group (the node spacing on the object's top, 0 without such
     an edge); the view margin is the smallest ``edge[bin] - slope`` of its high nodes, the
-    view edge computed on the graph's own nodes (``view_edge_kernel``).
+    view edge computed on the graph's own nodes (``view_edge_kernel``); ``M_HBOX`` holds the
+    high nodes' box in the ground plane (Algorithm 3's A_min/A_max of ``map_box_from_high``).
 
     Args:
         nodes: (n, 3) float64, metres.
@@ -1551,8 +1553,8 @@ def map_objects_kernel(
         edge: (nbins,) float64, the largest tan(elevation) of the nodes in each bin.
 
     Returns:
-        (G, N_MAP_COLS) float64, ``M_*`` columns (NaN extents and inf margin without a high
-        node).
+        (G, N_MAP_COLS) float64, ``M_*`` columns (NaN extents, inf margin and an empty (inf,
+        -inf) high box without a high node).
     """
     n = nodes.shape[0]
     out = np.zeros((ngroups, N_MAP_COLS))
@@ -1576,6 +1578,9 @@ def map_objects_kernel(
         for d in range(3):
             out[g, M_BOX + d] = np.inf
             out[g, M_BOX + 3 + d] = -np.inf
+        for d in range(2):
+            out[g, M_HBOX + d] = np.inf
+            out[g, M_HBOX + 2 + d] = -np.inf
         # The group's facets are contiguous in ``order``; ``stamp`` marks its nodes (a node
         # on facets of two groups counts in both).
         while q < order.shape[0] and fgroup[order[q]] == g:
@@ -1604,6 +1609,10 @@ def map_objects_kernel(
                     out[g, M_F1] = max(out[g, M_F1], pf)
                     out[g, M_L0] = min(out[g, M_L0], pl)
                     out[g, M_L1] = max(out[g, M_L1], pl)
+                    out[g, M_HBOX] = min(out[g, M_HBOX], x)
+                    out[g, M_HBOX + 1] = min(out[g, M_HBOX + 1], y)
+                    out[g, M_HBOX + 2] = max(out[g, M_HBOX + 2], x)
+                    out[g, M_HBOX + 3] = max(out[g, M_HBOX + 3], y)
                     b = bins[v]
                     if b >= 0:
                         out[g, M_VIEW] = min(out[g, M_VIEW], edge[b] - slope[v])
@@ -1671,7 +1680,47 @@ Q_VIEW_BINS = 1
 Q_EDGE_CORRECTION = 2
 Q_VIEW_CUT = 3
 Q_MIN_HEIGHT = 4
-N_MAP_PARAMS = 5
+Q_HIGH_BOX = 5  # PipelineParams.map_box_from_high
+Q_VIEW_FIRST = 6  # PipelineParams.map_view_first
+Q_FLOOR_PLANE = 7  # PipelineParams.map_floor_plane
+N_MAP_PARAMS = 8
+
+
+@njit(cache=True)
+def floor_level(nodes, facets, flabels, lab, ground):
+    """The floor plane's height on the map: the median height of the terrain facets' nodes.
+
+    A_h is read against the floor (§4.2.1); ``detect_kernel``'s ground level is the floor
+    region's area-weighted height, which the raised facets round a block's or a wall's foot
+    (still terrain up to ``raised_node_tolerance``) lift by up to 1.4 cm on Table 2's net.
+    The median of the distinct nodes is the level most of the floor's nodes lie on.
+
+    Args:
+        nodes: (n, 3) float64, metres.
+        facets: (F, 3) int64 node indices.
+        flabels: (F,) int64 label of each facet.
+        lab: (K, N_LABEL_COLS) float64 label table (``L_KIND`` read).
+        ground: metres, returned when no facet is terrain.
+
+    Returns:
+        metres, the floor level.
+    """
+    n = nodes.shape[0]
+    seen = np.zeros(n, np.bool_)
+    zs = np.empty(n)
+    k = 0
+    for f in range(facets.shape[0]):
+        if lab[flabels[f], L_KIND] != KIND_TERRAIN:
+            continue
+        for c in range(3):
+            v = facets[f, c]
+            if not seen[v]:
+                seen[v] = True
+                zs[k] = nodes[v, 2]
+                k += 1
+    if k == 0:
+        return ground
+    return np.median(zs[:k])
 
 
 @njit(cache=True)
@@ -1687,16 +1736,20 @@ def map_step_kernel(
 ):
     """The map-mode object steps on ``detect_kernel``'s labels, in one compiled call.
 
-    ``AttentionPipeline`` reads an object's measures from the map alone ("map" mode): object
-    labels whose boxes overlap in the ground plane are one group (union in label order; the
-    group takes its first label's place), each group measured by :func:`map_objects_kernel`
-    (high-node extents plus ``Q_EDGE_CORRECTION`` × their spacing, the box grown by half of
-    it in the ground plane), relabelled wall at the top of the graph's own view
-    (``Q_VIEW_CUT``, :func:`view_edge_kernel` on the nodes), and suspected below the density
-    threshold. A merged group's position is the facet-count-weighted mean of its pieces', its
-    size their sum; its normal is returned *unnormalised* (the weighted sum) and its index
-    listed in ``merged``, for the caller to normalise as ``np.linalg.norm`` does (whose
-    rounding is not a plain square root's) and to set γ from.
+    ``AttentionPipeline`` reads an object's measures from the map alone ("map" mode): with
+    ``Q_FLOOR_PLANE`` the ground level is first the floor plane of the terrain facets' nodes
+    (:func:`floor_level`); object labels whose boxes overlap in the ground plane are one group
+    (union in label order; the group takes its first label's place), except, with
+    ``Q_VIEW_FIRST``, a label whose own high nodes reach the graph's view edge (merged with
+    none); each group is measured by :func:`map_objects_kernel` (high-node extents plus
+    ``Q_EDGE_CORRECTION`` × their spacing; the box is the high nodes' with ``Q_HIGH_BOX``,
+    else all the group's nodes', grown by half the correction in the ground plane),
+    relabelled wall at the top of the graph's own view (``Q_VIEW_CUT``,
+    :func:`view_edge_kernel` on the nodes), and suspected below the density threshold. A
+    merged group's position is the facet-count-weighted mean of its pieces', its size their
+    sum; its normal is returned *unnormalised* (the weighted sum) and its index listed in
+    ``merged``, for the caller to normalise as ``np.linalg.norm`` does (whose rounding is not
+    a plain square root's) and to set γ from.
 
     Args:
         nodes: (n, 3) float64, metres.
@@ -1715,13 +1768,16 @@ def map_step_kernel(
         mq: (N_MAP_PARAMS,) float64, the map-mode parameters (``Q_*``).
 
     Returns:
-        ``(lab, pos, normal, box, flabels, merged, sboxes)``: the new label table (K', L_*
-        columns), positions, normals, boxes, the (F,) int64 new label of each facet, the int64
-        indices of the merged labels and the (S, 2, 3) padded boxes of the suspected objects.
-        Without an object label the inputs come back as they are (``lab`` itself).
+        ``(lab, pos, normal, box, flabels, merged, sboxes, ground)``: the new label table (K',
+        L_* columns), positions, normals, boxes, the (F,) int64 new label of each facet, the
+        int64 indices of the merged labels, the (S, 2, 3) padded boxes of the suspected
+        objects and the ground level the objects were measured from. Without an object label
+        the inputs come back as they are (``lab`` itself), with that ground level.
     """
     nl = lab.shape[0]
     tol = prm[P_GROUND_TOL]
+    if mq[Q_FLOOR_PLANE] != 0.0:
+        ground = floor_level(nodes, facets, flabels, lab, ground)
     objs = np.empty(nl, np.int64)
     nobj = 0
     for k in range(nl):
@@ -1729,13 +1785,33 @@ def map_step_kernel(
             objs[nobj] = k
             nobj += 1
     if nobj == 0:
-        return lab, pos, normal, box, flabels, np.zeros(0, np.int64), np.empty((0, 2, 3))
+        return lab, pos, normal, box, flabels, np.zeros(0, np.int64), np.empty((0, 2, 3)), ground
     root = np.arange(nobj)
+    nf = facets.shape[0]
+    slope, bins, vedge = view_edge_kernel(nodes, fx, fy, origin, int(mq[Q_VIEW_BINS]), 4.0)
+    view_cut = mq[Q_VIEW_CUT]
+    # The view edge is read on each label alone, before the merge: a wall's foot and a block
+    # in front of it have overlapping boxes, and merged, the block went into the wall.
+    at_edge = np.zeros(nobj, np.bool_)
+    if view_cut >= 0.0 and mq[Q_MERGE] != 0.0 and mq[Q_VIEW_FIRST] != 0.0:
+        obj_of = np.full(nl, -1, np.int64)
+        for a in range(nobj):
+            obj_of[objs[a]] = a
+        fsingle = np.empty(nf, np.int64)
+        for f in range(nf):
+            fsingle[f] = obj_of[flabels[f]]
+        single = map_objects_kernel(
+            nodes, edges, facets, fsingle, nobj, ground, tol, fx, fy, slope, bins, vedge
+        )
+        for a in range(nobj):
+            at_edge[a] = single[a, M_NHIGH] > 0.0 and single[a, M_VIEW] <= view_cut
     if mq[Q_MERGE] != 0.0:
         for a in range(nobj):
             ka = objs[a]
             for b in range(a + 1, nobj):
                 kb = objs[b]
+                if at_edge[a] or at_edge[b]:
+                    continue
                 if (
                     box[ka, 0, 0] <= box[kb, 1, 0]
                     and box[kb, 0, 0] <= box[ka, 1, 0]
@@ -1752,13 +1828,11 @@ def map_step_kernel(
             gid[r] = ng
             ng += 1
         label_group[objs[a]] = gid[r]
-    nf = facets.shape[0]
     fgroup = np.empty(nf, np.int64)
     counts = np.zeros(nl, np.int64)
     for f in range(nf):
         fgroup[f] = label_group[flabels[f]]
         counts[flabels[f]] += 1
-    slope, bins, vedge = view_edge_kernel(nodes, fx, fy, origin, int(mq[Q_VIEW_BINS]), 4.0)
     res = map_objects_kernel(
         nodes, edges, facets, fgroup, ng, ground, tol, fx, fy, slope, bins, vedge
     )
@@ -1781,7 +1855,6 @@ def map_step_kernel(
     new_of = np.full(nl, -1, np.int64)
     out_of_group = np.full(ng, -1, np.int64)
     corr = mq[Q_EDGE_CORRECTION]
-    view_cut = mq[Q_VIEW_CUT]
     nsus = 0
     j = 0
     for k in range(nl):
@@ -1842,6 +1915,11 @@ def map_step_kernel(
                 obox[j, 1, d] = res[g, M_BOX + 3 + d]
             if res[g, M_NHIGH] > 0.0:
                 cc = corr * res[g, M_SPACING]
+                if mq[Q_HIGH_BOX] != 0.0:
+                    obox[j, 0, 0] = res[g, M_HBOX]
+                    obox[j, 0, 1] = res[g, M_HBOX + 1]
+                    obox[j, 1, 0] = res[g, M_HBOX + 2]
+                    obox[j, 1, 1] = res[g, M_HBOX + 3]
                 obox[j, 0, 0] -= 0.5 * cc
                 obox[j, 0, 1] -= 0.5 * cc
                 obox[j, 1, 0] += 0.5 * cc
@@ -1881,4 +1959,4 @@ def map_step_kernel(
                 sboxes[q, 0, d] = obox[i, 0, d] - pad
                 sboxes[q, 1, d] = obox[i, 1, d] + pad
             q += 1
-    return olab, opos, onormal, obox, oflabels, merged[:nmerged], sboxes
+    return olab, opos, onormal, obox, oflabels, merged[:nmerged], sboxes, ground

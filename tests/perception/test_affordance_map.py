@@ -63,6 +63,8 @@ def test_map_objects_kernel_hand_computed_measures():
     # 12 grid edges of 0.05 m and 4 diagonals of 0.0707 m: the median is 0.05
     assert r[_k.M_SPACING] == pytest.approx(0.05)
     np.testing.assert_allclose(r[_k.M_BOX : _k.M_BOX + 6], [0.6, -0.05, 0.06, 0.7, 0.05, 0.06])
+    # all nine are high: the high nodes' box is the same in the ground plane
+    np.testing.assert_allclose(r[_k.M_HBOX : _k.M_HBOX + 4], [0.6, -0.05, 0.7, 0.05])
     # The floor node (slope (0 - 0.3) / 0.5 = -0.6) shares the central bin with the grid;
     # the grid's nearest row (slope (0.06 - 0.3) / 0.6 = -0.4) is the highest there: margin 0.
     assert r[_k.M_VIEW] == pytest.approx(0.0)
@@ -80,6 +82,73 @@ def test_map_objects_kernel_without_high_nodes_gives_nan_extents():
     assert res[0, _k.M_NNODES] == 9 and res[0, _k.M_NHIGH] == 0
     assert math.isnan(res[0, _k.M_HEIGHT]) and math.isnan(res[0, _k.M_F0])
     assert res[0, _k.M_SPACING] == 0.0
+
+
+def test_floor_level_is_the_median_of_the_terrain_facets_nodes():
+    # Terrain facets (label 0) over nodes at z 0, 0, 0.01, 0.002 (node 3 on two facets, counted
+    # once) and an object facet (label 1) over nodes at 0.06: median of (0, 0, 0.002, 0.01)
+    # = (0 + 0.002) / 2 = 0.001. Without terrain the given level comes back.
+    nodes = np.array(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0.01], [1, 1, 0.002], [2, 2, 0.06], [2, 3, 0.06]], float
+    )
+    facets = np.array([[0, 1, 3], [0, 3, 2], [3, 4, 5]], np.int64)
+    lab = np.zeros((2, _k.N_LABEL_COLS))
+    lab[0, _k.L_KIND], lab[1, _k.L_KIND] = _k.KIND_TERRAIN, _k.KIND_OBJECT
+    flabels = np.array([0, 0, 1], np.int64)
+    assert _k.floor_level(nodes, facets, flabels, lab, 0.5) == pytest.approx(0.001)
+    assert _k.floor_level(nodes, facets, np.array([1, 1, 1], np.int64), lab, 0.5) == 0.5
+
+
+def _two_labels():
+    """Map-step inputs by hand: label 0, the 3 × 3 grid of :func:`_top_grid` (a block top
+    6 cm up, x 0.60–0.70) with the floor node on one more facet; label 1, the same grid moved
+    to x 1.00–1.10 (the graph's farthest nodes: a wall's foot at the view edge). Their boxes
+    overlap in the ground plane (label 1's box is given wide, as a wall foot's is)."""
+    top, edges0, facets0 = _top_grid()
+    far = top[:9] + np.array([0.4, 0.0, 0.0])
+    nodes = np.vstack([top, far])
+    edges = np.vstack([edges0, edges0[:-1] + 10])
+    facets = np.vstack([facets0, [[9, 0, 1]], facets0 + 10])
+    flabels = np.array([0] * 9 + [1] * 8, np.int64)
+    lab = np.zeros((2, _k.N_LABEL_COLS))
+    lab[:, _k.L_KIND] = _k.KIND_OBJECT
+    lab[:, _k.L_SIZE] = 0.01
+    box = np.array([[[0.5, -0.05, 0.0], [0.7, 0.05, 0.06]], [[0.55, -1.0, 0.0], [1.1, 1.0, 0.06]]])
+    return nodes, edges, facets, flabels, lab, box
+
+
+def _map_step(params, inputs):
+    nodes, edges, facets, flabels, lab, box = inputs
+    pipe = AttentionPipeline(params=params)
+    ap = pipe.affordance_params
+    return _k.map_step_kernel(
+        nodes, edges, ORIGIN, 1.0, 0.0, 0.0, facets, flabels, lab, np.zeros((2, 3)),
+        np.zeros((2, 3)), box, ap.packed, pipe._map_packed,
+    )  # fmt: skip
+
+
+def test_map_view_first_keeps_a_block_out_of_the_wall_foot_in_its_box():
+    inputs = _two_labels()
+    olab, *_ = _map_step(PipelineParams(affordance_source="map", map_view_first=True), inputs)
+    # the block stays an object, the far strip is relabelled wall
+    assert olab[:, _k.L_KIND].tolist() == [_k.KIND_OBJECT, _k.KIND_WALL]
+    olab, *_ = _map_step(PipelineParams(affordance_source="map", map_view_first=False), inputs)
+    # merged first (the boxes overlap), the pair reaches the view edge: one wall
+    assert olab[:, _k.L_KIND].tolist() == [_k.KIND_WALL]
+
+
+def test_map_box_from_high_is_algorithm_3s_box_on_the_block():
+    # Label 0: high nodes x 0.60–0.70, y ±0.05, spacing 0.05, the floor node at x 0.5 on one
+    # facet. Correction 1.5 × 0.05 = 0.075, half of it 0.0375 on each side.
+    inputs = _two_labels()
+    p = PipelineParams(affordance_source="map", map_box_from_high=True)
+    _, _, _, obox, *_ = _map_step(p, inputs)
+    np.testing.assert_allclose(obox[0, :, :2], [[0.5625, -0.0875], [0.7375, 0.0875]])
+    assert obox[0, 0, 2] == 0.0  # the floor node keeps the box's foot
+    p = PipelineParams(affordance_source="map", map_box_from_high=False)
+    _, _, _, obox, *_ = _map_step(p, inputs)
+    # all the label's nodes: the floor node at x 0.5 widens it
+    np.testing.assert_allclose(obox[0, :, :2], [[0.4625, -0.0875], [0.7375, 0.0875]])
 
 
 def test_affordance_source_is_validated():
@@ -214,11 +283,15 @@ def _graphs():
     return out
 
 
-@pytest.mark.parametrize("merge", [True, False])
-def test_compiled_map_steps_equal_the_numpy_oracle(merge):
-    pipe = AttentionPipeline(
-        affordance_source="map", params=PipelineParams(affordance_source="map", map_merge=merge)
-    )
+@pytest.mark.parametrize(
+    "merge, new_steps", [(True, True), (False, True), (True, False), (False, False)]
+)
+def test_compiled_map_steps_equal_the_numpy_oracle(merge, new_steps):
+    params = PipelineParams(
+        affordance_source="map", map_merge=merge, map_view_first=new_steps,
+        map_box_from_high=new_steps, map_floor_plane=new_steps,
+    )  # fmt: skip
+    pipe = AttentionPipeline(affordance_source="map", params=params)
     checked = merged = 0
     for nodes, edges in _graphs():
         pipe.net = _Frozen(nodes, edges)
@@ -251,6 +324,23 @@ def _map_objects_oracle(self, aff, sensor_origin, forward):
     if h < 1e-9 or origin.shape != (3,) or len(nodes) == 0:
         return aff
     fx, fy = float(fwd[0]) / h, float(fwd[1]) / h
+    ground = float(aff.ground_z)
+    if p.map_floor_plane:
+        terrain = [k for k, o in enumerate(aff.objects) if o.kind == "terrain"]
+        ids = np.unique(aff.facets[np.isin(aff.facet_labels, terrain)])
+        if len(ids):
+            ground = float(np.median(nodes[ids, 2]))
+    slope, bins, edge = _k.view_edge_kernel(nodes, fx, fy, origin, p.map_view_bins, 4.0)
+    # The view edge of each object label alone: a label there is merged with none.
+    at_edge = [False] * len(objs)
+    if p.map_view_first and p.map_merge and p.map_view_cut >= 0.0:
+        single = np.full(len(aff.objects), -1, np.int64)
+        single[objs] = np.arange(len(objs))
+        one = _k.map_objects_kernel(
+            nodes, edges, aff.facets, single[aff.facet_labels], len(objs), ground,
+            ap.ground_tolerance, fx, fy, slope, bins, edge,
+        )  # fmt: skip
+        at_edge = [bool(r[_k.M_NHIGH] > 0 and r[_k.M_VIEW] <= p.map_view_cut) for r in one]
     # Union of overlapping object boxes (a handful of objects: plain loops).
     root = list(range(len(objs)))
 
@@ -264,6 +354,8 @@ def _map_objects_oracle(self, aff, sensor_origin, forward):
             ba = aff.objects[objs[a]].box
             for b in range(a + 1, len(objs)):
                 bb = aff.objects[objs[b]].box
+                if at_edge[a] or at_edge[b]:
+                    continue
                 if (ba[0, 0] <= bb[1, 0] and bb[0, 0] <= ba[1, 0]
                         and ba[0, 1] <= bb[1, 1] and bb[0, 1] <= ba[1, 1]):  # fmt: skip
                     root[find(b)] = find(a)
@@ -278,9 +370,8 @@ def _map_objects_oracle(self, aff, sensor_origin, forward):
         label_group[k] = gids[r]
         members[gids[r]].append(k)
     fgroup = label_group[aff.facet_labels]
-    slope, bins, edge = _k.view_edge_kernel(nodes, fx, fy, origin, p.map_view_bins, 4.0)
     res = _k.map_objects_kernel(
-        nodes, edges, aff.facets, fgroup, len(members), float(aff.ground_z),
+        nodes, edges, aff.facets, fgroup, len(members), ground,
         ap.ground_tolerance, fx, fy, slope, bins, edge,
     )  # fmt: skip
     counts = np.bincount(aff.facet_labels, minlength=len(aff.objects))
@@ -315,6 +406,8 @@ def _map_objects_oracle(self, aff, sensor_origin, forward):
         box = row[_k.M_BOX : _k.M_BOX + 6].reshape(2, 3).copy()
         if row[_k.M_NHIGH] > 0:
             c = p.map_edge_correction * float(row[_k.M_SPACING])
+            if p.map_box_from_high:
+                box[:, :2] = row[_k.M_HBOX : _k.M_HBOX + 4].reshape(2, 2)
             box[0, :2] -= 0.5 * c
             box[1, :2] += 0.5 * c
             o = o._replace(
@@ -341,7 +434,7 @@ def _map_objects_oracle(self, aff, sensor_origin, forward):
     ).reshape(-1, 2, 3)
     return Affordances(
         objects, sboxes, aff.facets, aff.facet_normals, new_of[aff.facet_labels],
-        tuple(o.kind for o in objects), aff.ground_z, aff.truncated,
+        tuple(o.kind for o in objects), ground, aff.truncated,
     )  # fmt: skip
 
 
@@ -358,7 +451,7 @@ def test_map_mode_relabels_a_surface_at_the_top_of_the_graphs_view_as_wall():
     # A strip of nodes 1.0 m ahead, 5 cm up, beyond the floor: the farthest (highest-elevation)
     # nodes of the graph in their azimuth, so the foot of something out of sight.
     pipe, aff = _run("map", cycles=1)
-    assert pipe.params.map_view_cut == 0.0
+    assert pipe.params.map_view_cut == 0.02  # tan, ≈ 1.1° below the view edge
     nodes, edges, facets = _top_grid()
     nodes = nodes + np.array([0.4, 0.0, 0.0])  # x 1.0–1.1: the farthest nodes
     slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
