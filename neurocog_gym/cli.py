@@ -148,7 +148,8 @@ def _cmd_bench(args) -> int:
     rate = 60.0 * res.ran / res.elapsed_s if res.ran else 0.0
     print(f"ran {res.ran} trials ({res.skipped} already done) on {res.workers} worker(s) in "
           f"{res.elapsed_s:.0f} s: {rate:.1f} trials/min")  # fmt: skip
-    print(f"results in {cfg.out}: trials.jsonl, summary.json, report.md")
+    written = [n for n in ("trials.jsonl", "summary.json", "report.md") if (cfg.out / n).exists()]
+    print(f"results in {cfg.out}: {', '.join(written)}")
     return 0
 
 

@@ -95,7 +95,7 @@ class Args:
     """Seconds after FL's lift-off from which the HL hold applies."""
     sag: float = 0.0
     """Walking provision s_SAG for t_lift + t_carry + t_drop from the lift-off (either primitive;
-    0: unchanged, -0.5: the trot marches in place)."""
+    0: unchanged, -0.5: stride scale 0.7; the trot marches in place at about -0.71)."""
 
 
 def leg_ik(dx: float, dz: float) -> tuple[float, float]:

@@ -79,8 +79,8 @@ class OracleParams:
     carry_gain: float = 20.0
     """Knee entry per metre of sole height below ``clearance`` above the top while carrying."""
     brake_sag: float = -0.5
-    """s_SAG while a leg drops (-0.5: stride scale 0, the trot marches in place,
-    ``generator.py``)."""
+    """s_SAG while a leg drops (-0.5: the stride scaled by 1 + 0.6 s_SAG = 0.7, the brake's
+    threshold; the trot marches in place, scale 0, only at about -0.71: ``generator.py``)."""
     land_hip: float = 0.0
     """Hip entry putting a carried foot down beyond the block (0: 1 success + 1 touch of 20 sudden
     trials on the knee-behind candidate, 12 falls; +1, a hard retraction that pitched the body
