@@ -656,44 +656,6 @@ class ObstacleEnv(QuadrupedEnv):
             obs["depth"] = self._depth_image.copy()  # the buffer changes with the next frame
         return obs
 
-    def _remembered_blocks(
-        self, rot: np.ndarray, torso: np.ndarray, yaw: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """The effectivity's remembered boxes as ``remembered_blocks`` rows, and their slots.
-
-        Returns:
-            (MEMORY_SLOTS, 7) float32 rows (``BLOCK_FIELDS``: valid, centre x, y from the torso
-            in its yaw frame, the yaw of the box side nearest the heading relative to it (within
-            ±45°), the half length along that side, the half width, the top above the floor; a
-            remembered box is axis-aligned in the world) and (K,) int64: the slot of each memory
-            box, -1 for one left out (more boxes than slots: the nearest are kept, in memory
-            order).
-        """
-        memory = self.effectivity.memory
-        k = len(memory)
-        out = np.zeros((MEMORY_SLOTS, len(BLOCK_FIELDS)), np.float32)
-        slot_of = np.full(max(k, 1), -1, np.int64)
-        if k == 0:
-            return out, slot_of
-        centre = 0.5 * (memory[:, 0] + memory[:, 1])
-        keep = np.arange(k)
-        if k > MEMORY_SLOTS:
-            dist = np.hypot(centre[:, 0] - torso[0], centre[:, 1] - torso[1])
-            keep = np.sort(np.argsort(dist, kind="stable")[:MEMORY_SLOTS])
-        # The world axis (of +x, +y, -x, -y) nearest the heading is the boxes' length axis.
-        quarter = round(yaw / (0.5 * np.pi))  # half to even, as np.round
-        axis = 0.5 * np.pi * quarter
-        rel_yaw = (axis - yaw + np.pi) % (2 * np.pi) - np.pi
-        along_x = quarter % 2 == 0
-        for slot, m in enumerate(keep):
-            lo, hi = memory[m, 0], memory[m, 1]
-            half = 0.5 * (hi[:2] - lo[:2])
-            hl, hw = (half[0], half[1]) if along_x else (half[1], half[0])
-            rel = rot @ (centre[m] - torso)
-            out[slot] = (1.0, rel[0], rel[1], rel_yaw, hl, hw, hi[2])
-            slot_of[m] = slot
-        return out, slot_of
-
     def _true_blocks(self, rot: np.ndarray, torso: np.ndarray) -> np.ndarray:
         """(TRUE_BLOCK_SLOTS * 7,) the placed blocks' true current boxes (privileged).
 

@@ -401,8 +401,12 @@ def test_more_remembered_boxes_than_slots_keeps_the_nearest_in_memory_order():
         c = torso[:2] + [dx, 0.0]
         eff._memory[m] = [[c[0] - 0.01, c[1] - 0.05, 0.0], [c[0] + 0.01, c[1] + 0.05, 0.07]]
     eff._n_memory = len(far)
-    rows, slot_of = u._remembered_blocks(np.eye(3), torso, 0.0)
-    # The two farthest (1.0 and 0.9: memory 0 and 2) are left out; the rest keep their order.
-    assert slot_of.tolist() == [-1, 0, -1, 1, 2, 3, 4, 5, 6, 7] and MEMORY_SLOTS == 8
-    np.testing.assert_allclose(rows[:, 1], [0.1, 0.2, 0.8, 0.3, 0.7, 0.4, 0.6, 0.5], atol=1e-6)
+    rows = u._get_obs()["remembered_blocks"].reshape(MEMORY_SLOTS, 7)
+    # The two farthest (1.0 and 0.9: memory 0 and 2) are left out; the rest keep their order,
+    # as offsets from the torso in its yaw frame.
+    yaw = u._yaw()
+    kept = [0.1, 0.2, 0.8, 0.3, 0.7, 0.4, 0.6, 0.5]
+    assert MEMORY_SLOTS == 8
+    np.testing.assert_allclose(rows[:, 1], np.array(kept) * np.cos(yaw), atol=1e-6)
+    np.testing.assert_allclose(rows[:, 2], -np.array(kept) * np.sin(yaw), atol=1e-6)
     assert (rows[:, 0] == 1).all() and np.allclose(rows[:, 4:7], [0.01, 0.05, 0.07])
