@@ -26,6 +26,7 @@ from neurocog_gym.locomotion.fit import (
 )
 from neurocog_gym.policies import AEFPolicy, start_episode
 from neurocog_gym.policies.aef import Odometry, boxes_in_frame, to_frame
+from tests.policies.stance import FEET, HIPS, KNEES, THIGHS  # a standing robot
 
 
 class Reference:
@@ -63,16 +64,6 @@ class Reference:
         elif d.mode == MODE_PROVISION:
             action[12:] = provision
         return action
-
-
-# The stance of a standing robot in its heading frame (as test_aef_policy.py).
-HIPS = np.array(
-    [[0.19, 0.07, 0.30], [0.19, -0.07, 0.30], [-0.19, 0.07, 0.30], [-0.19, -0.07, 0.30]]
-)
-THIGHS = HIPS + [[0, 0.05, 0], [0, -0.05, 0], [0, 0.05, 0], [0, -0.05, 0]]
-KNEES = THIGHS + [0.02, 0.0, -0.12]
-FEET = THIGHS.copy()
-FEET[:, 2] = 0.018
 
 
 def walk(seed, policy, reference, n=300):

@@ -8,15 +8,8 @@ import neurocog_gym  # noqa: F401  (registers the ids)
 from neurocog_gym.locomotion.fit import MODE_INTERRUPT, MODE_NONE, MODE_PROVISION
 from neurocog_gym.policies import AEFPolicy, BlindPolicy, make_policy, start_episode
 from neurocog_gym.policies.aef import Odometry, boxes_in_frame
+from tests.policies.stance import FEET, HIPS, KNEES, THIGHS  # a standing robot
 
-# A standing robot in its heading frame (torso at the origin, x ahead, y left, z above floor).
-HIPS = np.array(
-    [[0.19, 0.07, 0.30], [0.19, -0.07, 0.30], [-0.19, 0.07, 0.30], [-0.19, -0.07, 0.30]]
-)
-THIGHS = HIPS + [[0, 0.05, 0], [0, -0.05, 0], [0, 0.05, 0], [0, -0.05, 0]]
-KNEES = THIGHS + [0.02, 0.0, -0.12]
-FEET = THIGHS.copy()
-FEET[:, 2] = 0.018
 FL = 0
 
 
