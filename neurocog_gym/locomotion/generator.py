@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from neurocog_gym.locomotion._kernels import drive_kernel, generator_cycle
+from neurocog_gym.locomotion._kernels import generator_cycle
 from neurocog_gym.locomotion.cpg import CPGParams, MatsuokaCPG
 from neurocog_gym.locomotion.gait import Gait
 from neurocog_gym.locomotion.motor import MotorNeuronPools, MotorParams
@@ -155,19 +155,6 @@ class LocomotionGenerator:
         self.drive[:] = 0.0
         self.elapsed = 0.0
         self.pools.reset(self.posture)
-
-    def _drive(self, y: np.ndarray) -> None:
-        """Joint drives into ``self.drive``, hip drives into ``self.hip_drive``.
-
-        One numba call (``_kernels.drive_kernel``). Hip drive is negative while the leg
-        protracts (swing); the foot then moves to +y under a positive s_COR.
-        """
-        p = self.prov
-        drive_kernel(
-            y, _JOINT_NEURONS, self.g_flex, self.g_ext, self.provision, p.sag_gain, p.brake_from,
-            p.dir_gain, p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS,
-            ABDUCT_JOINTS, self.drive, self.hip_drive,
-        )  # fmt: skip
 
     def step(self, provision, interrupt, theta, theta_dot, touch) -> np.ndarray:
         """One control cycle (one compiled call, ``_kernels.generator_cycle``).

@@ -95,7 +95,11 @@ def test_the_compiled_cycle_is_the_separate_steps_bit_for_bit():
         if braking:
             ref.provision[0] = before + ref.dt / max(p.brake_tau, ref.dt) * (command[0] - before)
         y = ref.cpg.step(touch)
-        ref._drive(y)
+        drive_kernel(
+            y, _JOINT_NEURONS, ref.g_flex, ref.g_ext, ref.provision, p.sag_gain, p.brake_from,
+            p.dir_gain, p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS,
+            ABDUCT_JOINTS, ref.drive, ref.hip_drive,
+        )  # fmt: skip
         ref.elapsed += ref.dt
         if ref.elapsed < p.start_ramp:
             ref.drive *= ref.elapsed / p.start_ramp
