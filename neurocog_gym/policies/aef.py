@@ -47,7 +47,6 @@ from neurocog_gym.locomotion.aef import N_INPUTS, AEFWeights
 from neurocog_gym.locomotion.avoidance import SuddenAvoidance
 from neurocog_gym.locomotion.fit import (
     MODE_INTERRUPT,
-    MODE_NONE,
     MODE_PROVISION,
     FitDecision,
     FitParams,
@@ -133,17 +132,20 @@ class AEFPolicy:
         self._si[_k.SI_TEACHER + _fk.TI_STATE] = _fk.WALK
         self._known[:] = 0.0
         self._known_sudden[:] = False
-        self.mode = MODE_NONE
-        self._decided = False
+
+    @property
+    def mode(self) -> int:
+        """The last cycle's mode (``MODE_NONE`` before the first call of the episode)."""
+        return int(self._si[_k.SI_MODE])
 
     @property
     def decision(self) -> FitDecision | None:
         """The last cycle's decision (copies), None before the first call of the episode."""
-        if not self._decided:
+        if self._si[_k.SI_CYCLES] == 0:
             return None
         r = self._rows3
         return FitDecision(
-            mode=int(self._si[_k.SI_MODE]),
+            mode=self.mode,
             provision=r[_k.R_PROVISION].copy(),
             slots=r[_k.R_SLOTS : _k.R_PROVISION].copy(),
             target=int(self._si[_k.SI_TARGET]),
@@ -161,8 +163,6 @@ class AEFPolicy:
         if mode < 0:
             self._grow_or_raise(obs, mode)
             return self(obs)
-        self.mode = mode
-        self._decided = True
         action = np.zeros(ACTION_DIM, dtype=np.float32)
         if mode == MODE_PROVISION:
             action[12:] = self._forward(self._head_provision)
