@@ -1793,6 +1793,7 @@ def map_step_kernel(
     # The view edge is read on each label alone, before the merge: a wall's foot and a block
     # in front of it have overlapping boxes, and merged, the block went into the wall.
     at_edge = np.zeros(nobj, np.bool_)
+    single = np.empty((0, N_MAP_COLS))
     if view_cut >= 0.0 and mq[Q_MERGE] != 0.0 and mq[Q_VIEW_FIRST] != 0.0:
         obj_of = np.full(nl, -1, np.int64)
         for a in range(nobj):
@@ -1833,9 +1834,13 @@ def map_step_kernel(
     for f in range(nf):
         fgroup[f] = label_group[flabels[f]]
         counts[flabels[f]] += 1
-    res = map_objects_kernel(
-        nodes, edges, facets, fgroup, ng, ground, tol, fx, fy, slope, bins, vedge
-    )
+    if ng == nobj and single.shape[0] == nobj:
+        # No label merged: the groups are the labels in order, measured already.
+        res = single
+    else:
+        res = map_objects_kernel(
+            nodes, edges, facets, fgroup, ng, ground, tol, fx, fy, slope, bins, vedge
+        )
     # Each group's members in label order; the group's first label is where it goes.
     first = np.full(ng, -1, np.int64)
     nmem = np.zeros(ng, np.int64)
