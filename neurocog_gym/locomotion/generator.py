@@ -180,15 +180,15 @@ class LocomotionGenerator:
         ):  # fmt: skip
             self._cycle_key = (p, cpg, pools, cpg.params, pools.params)
             self._cycle_args = self._constant_args()
-        first, second = self._cycle_args
+        first, second, third = self._cycle_args
         generator_cycle(
             np.asarray(provision, dtype=np.float64), self.provision, *first,
             np.asarray(touch, dtype=np.float64), *second, ramp, pools.q_ref, pools.qd_ref,
-            np.asarray(interrupt, dtype=np.float64), theta, theta_dot, *self._pool_args,
+            np.asarray(interrupt, dtype=np.float64), theta, theta_dot, *third,
         )  # fmt: skip
         return pools.target
 
-    def _constant_args(self) -> tuple[tuple, tuple]:
+    def _constant_args(self) -> tuple[tuple, tuple, tuple]:
         """``generator_cycle``'s arguments that stay between cycles (parameters, buffers).
 
         Rebuilt when a parameter set, the CPG or the pools are replaced; their buffers are only
@@ -196,11 +196,6 @@ class LocomotionGenerator:
         """
         p, cpg, pools = self.prov, self.cpg, self.pools
         cp, mp = cpg.params, pools.params
-        self._pool_args = (
-            pools.posture, mp.mu1, mp.mu2, pools.acc_max, pools.vel_max, pools.fl_width,
-            mp.fl_c, mp.fv_K, mp.fv_N, pools.Z, mp.k_rest, mp.d_rest, pools.q_lo, pools.q_hi,
-            pools.dt, pools.acc, pools.coupling, pools.joint_lo, pools.joint_hi, pools.target,
-        )  # fmt: skip
         first = (
             self.dt / max(p.provision_tau, self.dt), self.dt / max(p.brake_tau, self.dt),
             p.brake_from, cpg.x, cpg.v, cpg.W, cpg.V,
@@ -211,7 +206,12 @@ class LocomotionGenerator:
             p.dir_gain, p.dir_steer, p.cor_gain, p.cor_front_bias, _SIDE, _FRONT, HIP_JOINTS,
             ABDUCT_JOINTS, self.drive, self.hip_drive,
         )  # fmt: skip
-        return first, second
+        third = (
+            pools.posture, mp.mu1, mp.mu2, pools.acc_max, pools.vel_max, pools.fl_width,
+            mp.fl_c, mp.fv_K, mp.fv_N, pools.Z, mp.k_rest, mp.d_rest, pools.q_lo, pools.q_hi,
+            pools.dt, pools.acc, pools.coupling, pools.joint_lo, pools.joint_hi, pools.target,
+        )  # fmt: skip
+        return first, second, third
 
     @property
     def swinging(self) -> np.ndarray:
