@@ -15,6 +15,11 @@ N_SAMPLES = 6
 O_CLOSE, O_NEED_LEFT, O_NEED_RIGHT, O_FAR, O_N_REL, O_N_IN, O_GAP_IN = range(7)
 N_OUT = 7
 
+WALK, REVERSE, SIDE, PASS = 0, 1, 2, 3
+"""The teacher's states (``avoidance.py``; its compiled form is ``_fit_kernel.teacher_update``)."""
+T_EPS = 1e-6
+"""s, how far short of a duration a sum of control-cycle steps may fall and still reach it."""
+
 
 @njit(cache=True)
 def leg_reach(feet, thighs, knees, top, out):

@@ -21,6 +21,11 @@ from neurocog_gym.locomotion._avoidance_kernel import (
     O_N_REL,
     O_NEED_LEFT,
     O_NEED_RIGHT,
+    PASS,
+    REVERSE,
+    SIDE,
+    T_EPS,
+    WALK,
     avoidance_geometry,
 )
 
@@ -139,10 +144,8 @@ N_TF = 6
 TI_STATE, TI_HAS_YAW0, TI_N_KNOWN = range(3)
 """Teacher integers: state (``avoidance.WALK`` ...), whether the heading is set, boxes known."""
 N_TI = 3
-WALK, REVERSE, SIDE, PASS = 0, 1, 2, 3
 MODE_NONE, MODE_INTERRUPT, MODE_PROVISION = 0, 1, 2
-T_EPS = 1e-6
-"""``avoidance._T_EPS``."""
+"""``fit.MODE_*`` (defined here for the kernels, re-exported there)."""
 
 
 @njit(cache=True, inline="always")

@@ -58,8 +58,8 @@ from neurocog_gym.locomotion import _avoidance_kernel as _k
 FOOT_RADIUS = _k.FOOT_RADIUS
 """Sole sphere radius, m (assets/quadruped.xml; the thigh and shank capsules: 0.017, 0.012)."""
 
-WALK, REVERSE, SIDE, PASS = 0, 1, 2, 3
-_T_EPS = 1e-6
+WALK, REVERSE, SIDE, PASS = _k.WALK, _k.REVERSE, _k.SIDE, _k.PASS
+_T_EPS = _k.T_EPS
 """s, how far short of a duration a sum of control-cycle steps may fall and still reach it."""
 STATE_NAMES = ("walk", "reverse", "side", "pass")
 

@@ -40,9 +40,7 @@ from neurocog_gym.locomotion import _fit_kernel as _k
 from neurocog_gym.locomotion.avoidance import FOOT_RADIUS, AvoidanceParams, SuddenAvoidance
 from neurocog_gym.robot.names import FRONT_LEGS
 
-MODE_NONE = 0
-MODE_INTERRUPT = 1
-MODE_PROVISION = 2
+MODE_NONE, MODE_INTERRUPT, MODE_PROVISION = _k.MODE_NONE, _k.MODE_INTERRUPT, _k.MODE_PROVISION
 MODE_NAMES = ("none", "interrupt", "provision")
 
 
