@@ -106,10 +106,12 @@ class FootingParams:
     """rad/s, the PD law's closed-loop natural frequency."""
     damping: float = 0.9
     """The PD law's damping ratio."""
-    k_rest: float = 160.0
-    """1/s^2, the pools' restoring stiffness (``MotorParams.k_rest``), cancelled while tracking."""
-    d_rest: float = 12.6
-    """1/s, the pools' restoring damping (``MotorParams.d_rest``)."""
+    k_rest: float | None = None
+    """1/s^2, the pools' restoring stiffness, cancelled while tracking; None: the shipped gait's
+    (``assets/default_gait.json``, 275 1/s^2; the oracle knows the plant's design, as it knows
+    ``NOMINAL_HIP``)."""
+    d_rest: float | None = None
+    """1/s, the pools' restoring damping; None: the shipped gait's (25 1/s)."""
     brake_levels: tuple[float, ...] = (0.0, -0.55, -0.62, -0.7)
     """s_SAG levels of the brake (0: none; -0.55, -0.62, -0.7: stride scale 0.53, 0.29, 0.02),
     held from a front leg's CPG onset for its swing."""
@@ -153,7 +155,17 @@ class FootingOracle:
     needs_privileged = True
 
     def __init__(self, params: FootingParams | None = None):
-        self.p = params or FootingParams()
+        p = params or FootingParams()
+        if p.k_rest is None or p.d_rest is None:
+            from dataclasses import replace
+
+            from neurocog_gym import paths
+            from neurocog_gym.locomotion.gait import Gait
+
+            gait = Gait.load(paths.asset(paths.DEFAULT_GAIT))
+            p = replace(p, k_rest=p.k_rest if p.k_rest is not None else gait.k_rest,
+                        d_rest=p.d_rest if p.d_rest is not None else gait.d_rest)  # fmt: skip
+        self.p = p
         self.reset()
 
     def reset(self, env=None) -> None:
