@@ -22,6 +22,22 @@ T_EPS = 1e-6
 
 
 @njit(cache=True)
+def sag_for_stride(scale, sag_gain, brake_from):
+    """``avoidance.sag_for_stride``: the s_SAG whose stride scale is ``scale``, in [-1, 1]."""
+    top = 1.0 + sag_gain * brake_from
+    if scale >= top:
+        s = (scale - 1.0) / sag_gain
+    else:
+        s = -1.0 + (scale + 1.0) * (brake_from + 1.0) / (top + 1.0)
+    # Python's min(max(s, -1.0), 1.0), NaN and all.
+    if -1.0 > s:
+        s = -1.0
+    if 1.0 < s:
+        s = 1.0
+    return s
+
+
+@njit(cache=True)
 def leg_reach(feet, thighs, knees, top, out):
     """Each leg's most forward x (thigh, shank and sole capsules) below ``top``, into ``out``."""
     for leg in range(4):

@@ -27,6 +27,7 @@ from neurocog_gym.locomotion._avoidance_kernel import (
     T_EPS,
     WALK,
     avoidance_geometry,
+    sag_for_stride,
 )
 
 
@@ -300,15 +301,7 @@ def teacher_update(
         if any_in:
             k = k + par[P_KX] * (par[P_SIDE_BACKOFF] - gap_in)
             k = _pmin(_pmax(k, par[P_K_MIN]), par[P_K_MAX])
-        # ``avoidance.sag_for_stride(1 - k)``.
-        scale = 1.0 - k
-        sag_gain, brake_from = par[P_SAG_GAIN], par[P_BRAKE_FROM]
-        top = 1.0 + sag_gain * brake_from
-        if scale >= top:
-            sag = (scale - 1.0) / sag_gain
-        else:
-            sag = -1.0 + (scale + 1.0) * (brake_from + 1.0) / (top + 1.0)
-        sag = _pmin(_pmax(sag, -1.0), 1.0)
+        sag = sag_for_stride(1.0 - k, par[P_SAG_GAIN], par[P_BRAKE_FROM])
         cor = direction * par[P_SIDE_COR]
         turn = -par[P_SIDE_DIR] * ey
     else:

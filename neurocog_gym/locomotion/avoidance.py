@@ -116,12 +116,7 @@ class AvoidanceParams:
 
 def sag_for_stride(scale: float, sag_gain: float = 0.6, brake_from: float = -0.5) -> float:
     """The s_SAG whose stride scale is ``scale`` (the generator's map, inverted), in [-1, 1]."""
-    top = 1.0 + sag_gain * brake_from
-    if scale >= top:
-        s = (scale - 1.0) / sag_gain
-    else:
-        s = -1.0 + (scale + 1.0) * (brake_from + 1.0) / (top + 1.0)
-    return float(min(max(s, -1.0), 1.0))
+    return float(_k.sag_for_stride(float(scale), float(sag_gain), float(brake_from)))
 
 
 class SuddenAvoidance:
