@@ -263,13 +263,13 @@ class SteppingStonesEnv(ObstacleEnv):
             self.in_pit = True
             self.pit_leg = int(np.flatnonzero(low)[0])
             self.pit_at = float(self.data.time)
+        self._crossed_now = False
         if self.course is not None and not self.in_pit and not self.crossed:
             beyond = bool(feet[:, 0].min() > self.course.end_edge + self.pass_margin)
             if beyond and not self._fell():
-                self.crossed = True
+                self.crossed = self._crossed_now = True
                 self.passed_at = float(self.data.time)
         self.passed = self.crossed
-        self._crossed_now = self.crossed and self.passed_at == float(self.data.time)
 
     def step(self, action):
         """One control cycle; terminates when the robot crosses, steps into the pit or falls."""
