@@ -13,6 +13,8 @@ import math
 import numpy as np
 from numba import njit
 
+# numba's cache keys a compiled function on its own file only: after editing
+# _avoidance_kernel.py, touch this file (decide_kernel calls its kernels) and _aef_kernel.py.
 from neurocog_gym.locomotion._avoidance_kernel import (
     O_CLOSE,
     O_FAR,
