@@ -554,26 +554,21 @@ class ObstacleEnv(QuadrupedEnv):
 
     # -- observation ----------------------------------------------------------------------------
 
-    def _objects(
-        self, rot: np.ndarray, out: np.ndarray | None = None, mask: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray, tuple]:
+    def _objects(self, rot: np.ndarray, out: np.ndarray, mask: np.ndarray) -> np.ndarray:
         """The K nearest objects ahead in the torso's yaw frame (``rot``: world to yaw frame).
 
-        ``out`` (N_OBJECTS, 8) and ``mask`` (N_OBJECTS,) float32 zeros to write into (new
-        arrays when None).
+        Writes them into ``out`` (N_OBJECTS, 8) and ``mask`` (N_OBJECTS,), float32 zeros.
+
+        Returns:
+            (3,) float64 A_h, A_w, A_s of the nearest (``_no_best`` without one).
         """
-        if out is None:
-            out = np.zeros((N_OBJECTS, len(OBJECT_FIELDS)), np.float32)
-        if mask is None:
-            mask = np.zeros(N_OBJECTS, np.float32)
         aff = self.pipeline.last
-        best = (0.0, 0.0, 0.0)
         if aff is None:
-            return out, mask, best
+            return self._no_best
         min_height = self.pipeline.params.min_height
         objs = [o for o in aff.objects if o.kind == "object" and o.height >= min_height]
         if not objs:
-            return out, mask, best
+            return self._no_best
         torso = self.data.xpos[self.robot.torso_body]
         rel = [rot @ (o.position - torso) for o in objs]
         if len(objs) == 1:
@@ -584,10 +579,8 @@ class ObstacleEnv(QuadrupedEnv):
             o = objs[k]
             out[slot] = (*rel[k], o.height, o.width, o.length, o.gamma, o.density)
             mask[slot] = 1.0
-        if len(order):
-            o = objs[order[0]]
-            best = (o.height, o.width, o.length)
-        return out, mask, best
+        o = objs[order[0]]
+        return np.array((o.height, o.width, o.length), dtype=np.float64)
 
     def _get_obs(self) -> dict[str, np.ndarray]:
         # One compiled pass (``_kernels.observation_kernel``) writes the keys into one new
@@ -605,11 +598,10 @@ class ObstacleEnv(QuadrupedEnv):
         aff = self.pipeline.last
         if self._perceive and aff is not None and aff.objects:
             rot = np.array([c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0]).reshape(3, 3)
-            _, _, best = self._objects(
+            best = self._objects(
                 rot, buf[_k.O_OBJECTS : _k.O_MASK].reshape(N_OBJECTS, len(OBJECT_FIELDS)),
                 buf[_k.O_MASK : _k.O_AEF],
             )  # fmt: skip
-            best = np.array(best, dtype=np.float64)
         eff = self.eff
         if eff is None:
             direction, foothold = np.zeros((4, 3)), self._feet().copy()
