@@ -560,7 +560,11 @@ def run_trial(
         if latency is not None:
             latency.control(t_start, u.interrupt_cycles > interrupts)
             frame = u.frame
-            sees = frame is not None and bool((frame.geom == u.pool.geoms[0]).any())
+            sees = (  # read until the first frame on the block
+                latency.first_frame is None
+                and frame is not None
+                and bool((frame.geom == u.pool.geoms[0]).any())
+            )
             latency.perceived(float(u.data.time), u.pipeline, _heading_xy(u.data.qpos), sees)
         # The pipeline's wall times of this cycle (the env's info may carry the total too).
         timings = u.pipeline.timings
