@@ -1560,11 +1560,11 @@ def map_objects_kernel(
     out = np.zeros((ngroups, N_MAP_COLS))
     stamp = np.full(n, -1, np.int64)
     order = np.argsort(fgroup, kind="mergesort")
-    lens = np.empty(max(edges.shape[0], 1))
     # Up to 62 groups, one pass over the edges for all of them (each node's groups as bits of
     # ``member``) instead of one pass per group; the spacings are the same medians.
     bits = ngroups <= 62
     member = np.zeros(n if bits else 0, np.int64)
+    lens = np.empty(1 if bits else max(edges.shape[0], 1))  # the per-group pass's lengths
     q = 0
     while q < order.shape[0] and fgroup[order[q]] < 0:
         q += 1
@@ -1808,10 +1808,12 @@ def map_step_kernel(
             at_edge[a] = single[a, M_NHIGH] > 0.0 and single[a, M_VIEW] <= view_cut
     if mq[Q_MERGE] != 0.0:
         for a in range(nobj):
+            if at_edge[a]:
+                continue
             ka = objs[a]
             for b in range(a + 1, nobj):
                 kb = objs[b]
-                if at_edge[a] or at_edge[b]:
+                if at_edge[b]:
                     continue
                 if (
                     box[ka, 0, 0] <= box[kb, 1, 0]
@@ -1860,7 +1862,6 @@ def map_step_kernel(
     new_of = np.full(nl, -1, np.int64)
     out_of_group = np.full(ng, -1, np.int64)
     corr = mq[Q_EDGE_CORRECTION]
-    nsus = 0
     j = 0
     for k in range(nl):
         g = label_group[k]
@@ -1911,8 +1912,6 @@ def map_step_kernel(
                 olab[j, L_SIZE] = size
             n_nodes = res[g, M_NNODES]
             if n_nodes == 0.0:
-                if olab[j, L_KIND] == KIND_OBJECT and olab[j, L_SUSPECTED] != 0.0:
-                    nsus += 1
                 j += 1
                 continue
             for d in range(3):
@@ -1944,10 +1943,6 @@ def map_step_kernel(
             ):
                 olab[j, L_KIND] = KIND_WALL
                 olab[j, L_SUSPECTED] = 0.0
-            if olab[j, L_KIND] == KIND_OBJECT and olab[j, L_SUSPECTED] != 0.0:
-                nsus += 1
-        elif olab[j, L_KIND] == KIND_OBJECT and olab[j, L_SUSPECTED] != 0.0:
-            nsus += 1
         j += 1
     for k in range(nl):
         if label_group[k] >= 0:
@@ -1955,6 +1950,10 @@ def map_step_kernel(
     oflabels = np.empty(nf, np.int64)
     for f in range(nf):
         oflabels[f] = new_of[flabels[f]]
+    nsus = 0
+    for i in range(nout):
+        if olab[i, L_KIND] == KIND_OBJECT and olab[i, L_SUSPECTED] != 0.0:
+            nsus += 1
     pad = prm[P_PADDING]
     sboxes = np.empty((nsus, 2, 3))
     q = 0
