@@ -70,6 +70,23 @@ def test_map_objects_kernel_hand_computed_measures():
     assert r[_k.M_VIEW] == pytest.approx(0.0)
 
 
+def test_map_objects_kernel_beyond_62_groups_measures_the_same():
+    # Above 62 groups the edge pass runs once per group instead of on bit masks: the grid as
+    # group 0 of 63 (groups 1..62 with no facet) has the same measures as alone.
+    nodes, edges, facets = _top_grid()
+    slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
+    fgroup = np.zeros(len(facets), np.int64)
+    one, many = (
+        _k.map_objects_kernel(
+            nodes, edges, facets, fgroup, g, 0.0, 0.02, 1.0, 0.0, slope, bins, edge
+        )
+        for g in (1, 63)
+    )
+    np.testing.assert_array_equal(many[0], one[0])
+    assert many[0, _k.M_SPACING] == pytest.approx(0.05)
+    assert (many[1:, _k.M_NNODES] == 0).all() and (many[1:, _k.M_SPACING] == 0).all()
+
+
 def test_map_objects_kernel_without_high_nodes_gives_nan_extents():
     nodes, edges, facets = _top_grid()
     nodes = nodes.copy()
