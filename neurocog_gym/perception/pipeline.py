@@ -69,6 +69,7 @@ into the detection's call, and the ``"affordance"`` timing holds both (``"refine
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, replace
@@ -213,6 +214,29 @@ class PipelineParams:
                 f"PipelineParams.map_view_bins must be an int >= 1, got {self.map_view_bins!r}"
             )
 
+    @functools.cached_property
+    def map_packed(self) -> np.ndarray:
+        """(N_MAP_PARAMS,) float64: the map settings as ``map_step_kernel`` reads them (once)."""
+        mq = np.empty(_k.N_MAP_PARAMS)
+        mq[_k.Q_MERGE] = 1.0 if self.map_merge else 0.0
+        mq[_k.Q_VIEW_BINS] = self.map_view_bins
+        mq[_k.Q_EDGE_CORRECTION] = self.map_edge_correction
+        mq[_k.Q_VIEW_CUT] = self.map_view_cut
+        mq[_k.Q_MIN_HEIGHT] = self.min_height
+        mq[_k.Q_HIGH_BOX] = 1.0 if self.map_box_from_high else 0.0
+        mq[_k.Q_VIEW_FIRST] = 1.0 if self.map_view_first else 0.0
+        mq[_k.Q_FLOOR_PLANE] = 1.0 if self.map_floor_plane else 0.0
+        mq.flags.writeable = False
+        return mq
+
+    @functools.cached_property
+    def map_packed_known_ground(self) -> np.ndarray:
+        """:attr:`map_packed` for a given ground level: the floor-plane step off."""
+        mq = self.map_packed.copy()
+        mq[_k.Q_FLOOR_PLANE] = 0.0
+        mq.flags.writeable = False
+        return mq
+
 
 def _overlap(a, b) -> bool:
     """Do boxes ``[[x0, y0, z0], [x1, y1, z1]]`` (nested lists of floats) overlap?"""
@@ -284,7 +308,6 @@ class AttentionPipeline:
         if affordance_source is not None:
             self.params = replace(self.params, affordance_source=affordance_source)
         self.affordance_params = affordance_params or AffordanceParams()
-        self._map_packed_of = (None, None)
         self.net = GNG_KINDS[self.params.gng](seed=seed, params=gng_params)
         self.memory_boxes = np.zeros((0, 2, 3))
         self.memory_time = np.zeros(0)
@@ -430,34 +453,6 @@ class AttentionPipeline:
                 aff = self._view_walls(aff, points, forward, sensor_origin, frame)
         return aff
 
-    @property
-    def _map_packed(self) -> np.ndarray:
-        """(N_MAP_PARAMS,) float64: the map-mode settings, as ``map_step_kernel`` reads them.
-
-        Packed again whenever ``params`` is replaced.
-        """
-        p = self.params
-        if self._map_packed_of[0] is not p:
-            mq = np.empty(_k.N_MAP_PARAMS)
-            mq[_k.Q_MERGE] = 1.0 if p.map_merge else 0.0
-            mq[_k.Q_VIEW_BINS] = p.map_view_bins
-            mq[_k.Q_EDGE_CORRECTION] = p.map_edge_correction
-            mq[_k.Q_VIEW_CUT] = p.map_view_cut
-            mq[_k.Q_MIN_HEIGHT] = p.min_height
-            mq[_k.Q_HIGH_BOX] = 1.0 if p.map_box_from_high else 0.0
-            mq[_k.Q_VIEW_FIRST] = 1.0 if p.map_view_first else 0.0
-            mq[_k.Q_FLOOR_PLANE] = 1.0 if p.map_floor_plane else 0.0
-            mq.flags.writeable = False
-            self._map_packed_of = (p, mq)
-        return self._map_packed_of[1]
-
-    @property
-    def _map_packed_known(self) -> np.ndarray:
-        """:attr:`_map_packed` for a given ground level: the floor-plane step off."""
-        mq = self._map_packed.copy()
-        mq[_k.Q_FLOOR_PLANE] = 0.0
-        return mq
-
     def _detect_map(self, sensor_origin, forward, ground_z) -> Affordances:
         """Detection and the map-mode object steps ("map" mode, §4.2.1; module docstring).
 
@@ -488,7 +483,7 @@ class AttentionPipeline:
         objects and cost as much as the detection itself at 300 nodes
         (``scripts/bench_affordance.py``). Without ``sensor_origin`` the steps are skipped.
         """
-        ap = self.affordance_params
+        p, ap = self.params, self.affordance_params
         nodes, edges = self.net.nodes, self.net.edges
         raw = detect_raw(nodes, edges, sensor_origin, ap, forward, ground_z)
         if isinstance(raw, Affordances):
@@ -500,7 +495,7 @@ class AttentionPipeline:
         fx, fy = _forward_xy(forward)
         olab, opos, onormal, obox, oflabels, merged, sboxes, ground = _k.map_step_kernel(
             nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box,
-            ap.packed, self._map_packed if ground_z is None else self._map_packed_known,
+            ap.packed, p.map_packed if ground_z is None else p.map_packed_known_ground,
         )  # fmt: skip
         if olab is lab:
             return assemble(ground, *raw[1:])  # no object: nothing else to do

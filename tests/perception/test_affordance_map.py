@@ -140,7 +140,7 @@ def _map_step(params, inputs):
     ap = pipe.affordance_params
     return _k.map_step_kernel(
         nodes, edges, ORIGIN, 1.0, 0.0, 0.0, facets, flabels, lab, np.zeros((2, 3)),
-        np.zeros((2, 3)), box, ap.packed, pipe._map_packed,
+        np.zeros((2, 3)), box, ap.packed, pipe.params.map_packed,
     )  # fmt: skip
 
 
