@@ -412,7 +412,7 @@ class AttentionPipeline:
         """The affordance half of a :meth:`step` on the current graph, nothing learned.
 
         :func:`detect_affordances` on the map, then the source's object steps (the map-mode
-        steps of :meth:`_map_objects`, or the raw-point refinement on ``points``), exactly as
+        steps of :meth:`_detect_map`, or the raw-point refinement on ``points``), exactly as
         :meth:`step` does after its learning cycle; the attention memory, :attr:`last` and
         :attr:`timings` are left alone. This is the per-frame detection the §7.2 figure
         (0.136 ms) is about (``scripts/bench_affordance.py`` times it).

@@ -1,7 +1,8 @@
 """The "map" affordance source: sizes from the DD-GNG nodes and facets alone (issue 23).
 
-pipeline.AttentionPipeline._map_objects, _affordance_kernels.map_objects_kernel, the
-``affordance_source`` keyword (pipeline and env) and scripts/bench_affordance_map.py.
+pipeline.AttentionPipeline._detect_map, _affordance_kernels.map_step_kernel and
+map_objects_kernel, the ``affordance_source`` keyword (pipeline and env) and
+scripts/bench_affordance_map.py.
 """
 
 from __future__ import annotations
