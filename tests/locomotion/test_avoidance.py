@@ -16,14 +16,7 @@ from neurocog_gym.locomotion.avoidance import (
 )
 from neurocog_gym.locomotion.effectivity import Effectivity
 from neurocog_gym.locomotion.fit import MODE_INTERRUPT, MODE_PROVISION, Fit, FitParams
-
-# A standing robot heading +x: thighs (hip joints) 0.22 m up, knees 0.02 m ahead at 0.11 m.
-THIGH = np.array(
-    [[0.15, 0.12, 0.22], [0.15, -0.12, 0.22], [-0.15, 0.12, 0.22], [-0.15, -0.12, 0.22]]
-)
-KNEE = THIGH + [0.02, 0.0, -0.11]
-FOOT = THIGH + [0.0, 0.0, -0.20]
-FOOT[:, 2] = 0.018
+from tests.locomotion.stance import FOOT, KNEE, THIGH  # a standing robot heading +x
 
 
 def box(x0, x1, y0, y1, h=0.07):

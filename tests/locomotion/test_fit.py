@@ -15,12 +15,9 @@ from neurocog_gym.locomotion.fit import (
     FitParams,
 )
 from neurocog_gym.robot.names import FRONT_LEGS
+from tests.locomotion.stance import FOOT, KNEE
+from tests.locomotion.stance import THIGH as HIP  # a standing robot heading +x
 
-# A standing robot heading +x (as tests/locomotion/test_avoidance.py).
-HIP = np.array([[0.15, 0.12, 0.22], [0.15, -0.12, 0.22], [-0.15, 0.12, 0.22], [-0.15, -0.12, 0.22]])
-KNEE = HIP + [0.02, 0.0, -0.11]
-FOOT = HIP + [0.0, 0.0, -0.20]
-FOOT[:, 2] = 0.018
 NO_TEACHER = FitParams(avoidance=AvoidanceParams(enabled=False))
 
 
