@@ -342,10 +342,6 @@ class ObstaclePool:
         self._touching(data, robot_geoms, hit)
         return hit
 
-    def touching_any(self, data: mujoco.MjData, robot_geoms: np.ndarray) -> bool:
-        """Whether any placed block is in contact with a robot geom now."""
-        return self._touching(data, robot_geoms, np.zeros(len(self.blocks), dtype=bool))
-
     def _touching(self, data: mujoco.MjData, robot_geoms: np.ndarray, hit: np.ndarray) -> bool:
         n = data.ncon
         if n == 0 or not self.blocks:
