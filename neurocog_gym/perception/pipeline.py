@@ -82,6 +82,7 @@ from neurocog_gym.perception.affordance import (
     AffordanceParams,
     Affordances,
     _forward_xy,
+    _origin,
     assemble,
     detect_affordances,
     detect_raw,
@@ -491,7 +492,7 @@ class AttentionPipeline:
         ground, truncated, facets, normals, flabels, lab, pos, normal, box, _ = raw
         if sensor_origin is None or not math.isfinite(ground):
             return assemble(*raw)
-        origin = np.ascontiguousarray(sensor_origin, dtype=np.float64).reshape(-1)
+        origin, _ = _origin(sensor_origin)  # checked by detect_raw; its fast path
         fx, fy = _forward_xy(forward)
         olab, opos, onormal, obox, oflabels, merged, sboxes, ground = _k.map_step_kernel(
             nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box,
