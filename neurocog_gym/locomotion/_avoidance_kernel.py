@@ -19,6 +19,8 @@ WALK, REVERSE, SIDE, PASS = 0, 1, 2, 3
 """The teacher's states (``avoidance.py``; its compiled form is ``_fit_kernel.teacher_update``)."""
 T_EPS = 1e-6
 """s, how far short of a duration a sum of control-cycle steps may fall and still reach it."""
+KNOWN_CAPACITY = 64
+"""Most boxes whose first sighting is remembered (later ones never engage)."""
 
 
 @njit(cache=True)

@@ -142,7 +142,7 @@ class SuddenAvoidance:
         self._gap = np.zeros(4)
         self._out = np.zeros(_k.N_OUT)
 
-    known_capacity = 64
+    known_capacity = _k.KNOWN_CAPACITY
     """Most boxes whose first sighting is remembered (later ones never engage)."""
 
     def adopt(self, box: np.ndarray, feet: np.ndarray) -> bool:

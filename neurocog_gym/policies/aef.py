@@ -42,9 +42,8 @@ import numpy as np
 
 from neurocog_gym import paths
 from neurocog_gym.locomotion import _fit_kernel as _fk
-from neurocog_gym.locomotion._avoidance_kernel import N_OUT
+from neurocog_gym.locomotion._avoidance_kernel import KNOWN_CAPACITY, N_OUT
 from neurocog_gym.locomotion.aef import N_INPUTS, AEFWeights
-from neurocog_gym.locomotion.avoidance import SuddenAvoidance
 from neurocog_gym.locomotion.fit import (
     MODE_INTERRUPT,
     MODE_PROVISION,
@@ -113,8 +112,8 @@ class AEFPolicy:
         self._head_provision = _Layer(*w.head_provision)
         self._sf = np.zeros(_k.SF_TEACHER + _fk.N_TF)
         self._si = np.zeros(_k.SI_TEACHER + _fk.N_TI, dtype=np.int64)
-        self._known = np.zeros((SuddenAvoidance.known_capacity, 2))
-        self._known_sudden = np.zeros(SuddenAvoidance.known_capacity, dtype=np.bool_)
+        self._known = np.zeros((KNOWN_CAPACITY, 2))
+        self._known_sudden = np.zeros(KNOWN_CAPACITY, dtype=np.bool_)
         self._inlane = np.zeros(4, dtype=np.bool_)
         self._geometry = np.zeros(4 + N_OUT)
         self._rows3 = np.zeros((_k.N_ROWS, 3))
