@@ -180,6 +180,21 @@ def _remainder(x, y):
 
 
 @njit(cache=True)
+def teacher_reset(tf, ti, known, known_sudden):
+    """``SuddenAvoidance.reset`` over the state arrays: walk, no heading yet, no box seen.
+
+    The heading's (cos, sin) start at (1, 0), as the class's: ``teacher_adopt`` can read them
+    before the first ``teacher_update`` sets them.
+    """
+    tf[:] = 0.0
+    tf[TF_C] = 1.0
+    ti[:] = 0
+    ti[TI_STATE] = WALK
+    known[:] = 0.0
+    known_sudden[:] = False
+
+
+@njit(cache=True)
 def teacher_adopt(box, feet, par, tf, ti, known, known_sudden):
     """``SuddenAvoidance.adopt`` over the state arrays (``decide_kernel``); returns whether taken.
 

@@ -126,11 +126,10 @@ class AEFPolicy:
         ``env`` is ignored (the hook's signature, :func:`~neurocog_gym.policies.start_episode`).
         """
         self._sf[:] = 0.0
-        self._sf[_k.SF_TEACHER + _fk.TF_C] = 1.0  # SuddenAvoidance.reset's heading (cos, sin)
         self._si[:] = 0
-        self._si[_k.SI_TEACHER + _fk.TI_STATE] = _fk.WALK
-        self._known[:] = 0.0
-        self._known_sudden[:] = False
+        _fk.teacher_reset(
+            self._sf[_k.SF_TEACHER :], self._si[_k.SI_TEACHER :], self._known, self._known_sudden
+        )
 
     @property
     def mode(self) -> int:
