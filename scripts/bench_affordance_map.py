@@ -51,7 +51,7 @@ from neurocog_gym.bench.perception_scenes import (
     object_on,
 )
 from neurocog_gym.io import atomic_write_text
-from neurocog_gym.perception import AffordanceParams, AttentionPipeline, PipelineParams
+from neurocog_gym.perception import AttentionPipeline, PipelineParams
 from neurocog_gym.robot.tof import ToFParams
 
 TOL_H, TOL_WL = 0.01, 0.02
@@ -114,7 +114,7 @@ def run_one(scene: StaticScene, args: Args, i: int, gng: str, source: str) -> Ru
     box, wall = sc.box, sc.wall
     scene.sensors.reset(seed=sc.tof_seed)
     pipe = AttentionPipeline(seed=sc.seed, params=PipelineParams(gng=gng), affordance_source=source)
-    max_tilt = AffordanceParams().terrain_max_tilt
+    max_tilt = pipe.affordance_params.terrain_max_tilt  # the detector's own (20°)
     scene.place([wall])
     t = scene.run(pipe, args.warmup, 0.0)
     scene.place([box, wall])
