@@ -40,8 +40,8 @@ def record(policy_name: str, seed: int) -> dict:
         t.append(float(u.data.time))
         z.append(u._feet()[:, 2] - radius)
         phase.append(u.eff.phase.copy() if u.eff.phase is not None else np.zeros(4, int))
-        fit = getattr(policy, "fit", None)  # the AEF's fit: the state its last action came from
-        state.append(fit.avoidance.state if fit is not None else 0)
+        # The AEF's walk-round teacher: the state its last action came from (0: walk).
+        state.append(getattr(policy, "teacher_state", 0))
         lead.append(float(u._feet()[:, 0].max()))
     outcome = info["outcome"] if info.get("passed") else "fail"
     outcome += "".join(f", {k}" for k in ("knocked", "stood_on", "fell") if info.get(k))

@@ -27,6 +27,7 @@ import numpy as np  # noqa: E402
 
 import neurocog_gym  # noqa: E402, F401  (registers the env ids)
 from neurocog_gym.io import atomic_path  # noqa: E402
+from neurocog_gym.locomotion.avoidance import STATE_NAMES  # noqa: E402
 from neurocog_gym.policies import make_policy, start_episode  # noqa: E402
 
 
@@ -55,8 +56,8 @@ def main(argv: list[str] | None = None) -> None:
     u = env.unwrapped
 
     def state() -> str:
-        fit = getattr(policy, "fit", None)  # the AEF's: its stop / side-step / pass teacher
-        return fit.avoidance.state_name if fit is not None else ""
+        state = getattr(policy, "teacher_state", None)  # the AEF's stop / side-step / pass
+        return STATE_NAMES[state] if state is not None else ""
 
     frames, states, times, appeared = [], [], [], None
     done = False

@@ -137,6 +137,11 @@ class AEFPolicy:
         return int(self._si[_k.SI_MODE])
 
     @property
+    def teacher_state(self) -> int:
+        """The walk-round teacher's state after the last cycle (``avoidance.STATE_NAMES``)."""
+        return int(self._si[_k.SI_TEACHER + _fk.TI_STATE])
+
+    @property
     def decision(self) -> FitDecision | None:
         """The last cycle's decision (copies), None before the first call of the episode."""
         if self._si[_k.SI_CYCLES] == 0:
