@@ -294,6 +294,13 @@ class ToFArray:
         """Rays a frame, S × H × W."""
         return self.params.n_rays
 
+    def __getstate__(self) -> dict:
+        # The shared views belong to this object's buffers: a pickled or deep-copied array
+        # makes its own at its first ``sense(copy=False)`` (a copied view would not change).
+        state = self.__dict__.copy()
+        state["_views"] = None
+        return state
+
     def reset(self, seed: int | None = None) -> None:
         """Restart the frame schedule (next call of ``maybe_sense`` senses); reseed if given."""
         if seed is not None:

@@ -7,6 +7,7 @@ yaws +60°, +20°, -20°, -60° (composite 165° × 62°), pitched 35° down, at
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import os
@@ -427,6 +428,20 @@ def test_pickled_array_senses_the_same(backend):
     a, b = tof.sense(data), clone.sense(data)
     np.testing.assert_array_equal(a.depth, b.depth)
     np.testing.assert_array_equal(a.points, b.points)
+
+
+@pytest.mark.parametrize("clone_of", [lambda t: pickle.loads(pickle.dumps(t)), copy.deepcopy])
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_copy_made_after_a_frame_shares_views_of_its_own_buffers(backend, clone_of):
+    model, data = build(add_world=add_box)
+    tof = ToFArray(model, ToFParams(backend=backend), seed=5)
+    tof.sense(data, copy=False)  # the shared views exist now
+    clone = clone_of(tof)
+    data.qpos[2] += 0.3  # another scene for the clone's frames
+    mujoco.mj_forward(model, data)
+    owned, view = clone.sense(data), clone.sense(data, copy=False)
+    for name in ("depth", "valid", "geom", "origins", "counts"):
+        assert getattr(view, name).tobytes() == getattr(owned, name).tobytes(), name
 
 
 # -- frame-rate gate ---------------------------------------------------------------------------
