@@ -311,6 +311,16 @@ def _as_slice(index: np.ndarray) -> slice | np.ndarray:
     return index
 
 
+def _as_stride(index: np.ndarray) -> slice | np.ndarray:
+    """``index`` as a slice when it is an increasing arithmetic progression, else unchanged."""
+    index = np.asarray(index)
+    if index.ndim == 1 and len(index) > 1:
+        step = int(index[1] - index[0])
+        if step > 0 and (np.diff(index) == step).all():
+            return slice(int(index[0]), int(index[-1]) + 1, step)
+    return _as_slice(index)
+
+
 def make_env(env_id: str, **kwargs) -> gym.Env:
     """``gymnasium.make`` with a clear error for an unknown id."""
     import neurocog_gym  # noqa: F401  (registers the ids)

@@ -81,7 +81,7 @@ from gymnasium.utils import EzPickle
 
 from neurocog_gym.envs import _kernels as _k
 from neurocog_gym.envs._kernels import depth_image
-from neurocog_gym.envs.base import QuadrupedEnv, _as_slice
+from neurocog_gym.envs.base import QuadrupedEnv, _as_slice, _as_stride
 from neurocog_gym.locomotion.effectivity import Effectivity, EffectivityParams, EffectivityState
 from neurocog_gym.perception.pipeline import AttentionPipeline, PipelineParams
 from neurocog_gym.robot.model import GRAVITY
@@ -690,16 +690,6 @@ class ObstacleEnv(QuadrupedEnv):
             for marker in overlay_markers(self):
                 viewer.add_marker(**marker)
         return super().render()
-
-
-def _as_stride(index: np.ndarray) -> slice | np.ndarray:
-    """``index`` as a slice when it is an increasing arithmetic progression, else unchanged."""
-    index = np.asarray(index)
-    if index.ndim == 1 and len(index) > 1:
-        step = int(index[1] - index[0])
-        if step > 0 and (np.diff(index) == step).all():
-            return slice(int(index[0]), int(index[-1]) + 1, step)
-    return _as_slice(index)
 
 
 def _env_perception(params: PipelineParams | None, tof: ToFArray) -> PipelineParams:

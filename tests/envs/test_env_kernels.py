@@ -371,7 +371,7 @@ def test_outcome_cycle_is_the_two_kernels_and_the_pass_bounds():
 
 
 def test_as_stride_for_arithmetic_progressions():
-    from neurocog_gym.envs.obstacle import _as_stride
+    from neurocog_gym.envs.base import _as_stride
 
     assert _as_stride(np.array([2, 5, 8, 11])) == slice(2, 12, 3)
     assert _as_stride(np.array([4, 5, 6])) == slice(4, 7, 1)
