@@ -243,7 +243,7 @@ def generator_cycle(
     """One control cycle of the whole generator (``LocomotionGenerator.step``) in one call.
 
     The provision's low-pass filter (the brake's on s_SAG while it or its command is below
-    ``brake_from``), ``matsuoka_step`` into ``y``, ``drive_kernel``, the soft start's ``ramp``
+    ``brake_from``), ``matsuoka_step_into`` ``y``, ``drive_kernel``, the soft start's ``ramp``
     factor on the drives (1.0 after the ramp: x * 1.0 is x), then ``motor_neuron_step``: the
     same operations in the same order as the separate calls, so the same bits.
 
@@ -260,7 +260,7 @@ def generator_cycle(
         provision[i] += a_prov * (command[i] - provision[i])
     if braking:
         provision[0] = before + a_brake * (command[0] - before)
-    y[:] = matsuoka_step(x, v, W, V, touch, u0, b, tau, T, tau_f, dt_units, n_sub)
+    matsuoka_step_into(x, v, W, V, touch, u0, b, tau, T, tau_f, dt_units, n_sub, y)
     drive_kernel(
         y, joint_neurons, g_flex, g_ext, provision, sag_gain, brake_from, dir_gain, dir_steer,
         cor_gain, cor_front_bias, side, front, hip_joints, abduct_joints, drive, hip_drive,
