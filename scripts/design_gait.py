@@ -124,16 +124,32 @@ class TrotDesign:
     is still in the air; Cruse's "a leg does not lift before its neighbour is down")."""
     t_ne: float = 0.0
     """S8 and S12, a ring neighbour's touch sensor -> hip extensor."""
+    walk: bool = False
+    """A lateral-sequence walk instead of the trot (FL, HR, FR, HL one after the other, a
+    quarter cycle apart; the paper's robot walks in the static-obstacle trials, §6.5.2): the
+    structure gene picks ring 5 (FL HR FR HL), on which relation B is the contralateral pair;
+    ``w``/``wb`` are then unused and ``wa``, ``wc``, ``wbw`` set the ring's couplings."""
+    wa: float = 0.0
+    """Walk: C53, C58, flexor -| flexor and extensor -| extensor to the next leg on the ring."""
+    wc: float = 0.3
+    """Walk: C29, C34, the same to the previous leg on the ring (wc > wa: each leg lags the one
+    before it on the ring by a quarter cycle; wa > wc reverses the sequence)."""
+    wbw: float = 0.3
+    """Walk: C41, C46, flexor -| flexor and extensor -| extensor across (the front pair and the
+    hind pair alternate)."""
 
 
 def build(p: TrotDesign) -> Gait:
     """The gait of design ``p``."""
     genes = np.zeros(N_GENES)
-    genes[0] = 0.05  # ring 0: FL FR HR HL, relation B is the diagonal
+    genes[0] = 5 / 6 + 0.05 if p.walk else 0.05  # ring 5 (walk) or ring 0: B the diagonal
     c = {1: p.c1, 12: 2.0, 17: 2.0, 23: 2.0, 28: 2.0}  # half-centres
     c.update({2: p.ring, 7: p.ring, 11: p.ring2, 15: p.ring2})  # knee-ahead ring
     c.update({3: p.kk, 6: p.kk6})  # in-phase trim
-    c.update({53: p.w, 58: p.w, 29: p.w, 34: p.w, 42: p.wb, 45: p.wb})  # trot
+    if p.walk:
+        c.update({53: p.wa, 58: p.wa, 29: p.wc, 34: p.wc, 41: p.wbw, 46: p.wbw})
+    else:
+        c.update({53: p.w, 58: p.w, 29: p.w, 34: p.w, 42: p.wb, 45: p.wb})  # trot
     for k, v in c.items():
         genes[k] = v
     genes[65:68] = p.t_hf, p.t_he, p.t_kf  # S1, S2, S3: the load rule (body v2)
@@ -154,7 +170,7 @@ def build(p: TrotDesign) -> Gait:
         acc_max=p.am,
         k_rest=p.kr,
         d_rest=2.0 * p.zeta * float(np.sqrt(p.kr)),
-        name="hand-designed trot",
+        name="hand-designed walk" if p.walk else "hand-designed trot",
         notes={"design": {f.name: getattr(p, f.name) for f in fields(p)}},
     )
 

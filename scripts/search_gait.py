@@ -10,7 +10,7 @@ Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers mult
   which its highest swing exceeds 5.8 cm;
 * |lateral drift| / 6 m;
 * 20 x the share of time both feet of one side are off the ground (a pace-like gait);
-* 0.3 x short touch-downs (contacts under 80 ms) per second;
+* 0.3 (``--short_weight``) x short touch-downs (contacts under 80 ms) per second;
 * with ``--mismatch W``: W x the share of time a foot's contact disagrees with its CPG phase
   (in the air while the CPG stands it, or down while it swings); with ``--swing S``: 30
   (``--swing_weight``) per second
@@ -49,6 +49,8 @@ GENE_KEYS = (
     *("t_hf", "t_he", "t_kf", "t_nf", "t_ne"),
 )
 """With ``--genes``: the CPG's synapse weights too (design_gait.py's docstring names them)."""
+WALK_GENE_KEYS = tuple(k for k in GENE_KEYS if k not in ("w", "wb")) + ("wa", "wc", "wbw")
+"""The same for a walk design (``TrotDesign.walk``): its ring couplings instead of the trot's."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,7 +89,7 @@ class Args:
     so a design that falls after a step over a block costs as a fall does (0: not used)."""
     kinds: str = "h"
     """The disturbances of ``--perturb``, in turn: h high step, d shortened step, o step over
-    (``walk_stats``)."""
+    (``walk_stats``); O the step over with a 0.16 s carry."""
     hip_height: float = 0.0
     """Lowest wanted mean hip height while walking, m; 100 per metre below it (0: not used)."""
     cma: bool = False
@@ -95,6 +97,11 @@ class Args:
     numbers moved relatively (``--sigma``), near-zero ones absolutely."""
     workers: int = 1
     """Processes evaluating a CMA-ES generation."""
+    short_weight: float = 0.3
+    """Cost per short touch-down (a contact under 80 ms) per second."""
+    support: float = 0.0
+    """Weight of the share of time with fewer than three soles on the ground (sole below
+    4 mm), for a walk (0: not used)."""
 
 
 def walk_stats(
@@ -143,14 +150,14 @@ def walk_stats(
                             kind[leg] = ""
                         else:
                             action[j + 1], action[j + 2] = 1.0, -1.0
-                elif k == "o":
+                elif k in ("o", "O"):
                     if phase[leg] == 0:
                         action[j + 2] = 1.0
                         if sole >= 0.10:
                             phase[leg], since[leg] = 1, 0.0
                     elif phase[leg] == 1:
                         action[j + 1], action[j + 2] = -1.0, 1.0 if sole < 0.09 else 0.5
-                        if since[leg] >= 0.08:
+                        if since[leg] >= (0.08 if k == "o" else 0.16):
                             phase[leg] = 2
                     else:
                         action[j + 2] = -1.0
@@ -208,7 +215,8 @@ def walk_stats(
     return {"fell": fell, "t": len(xs) * env.dt, "speed": (xs[-1, 0] - xs[n0, 0]) / span,
             "clear": med, "top": top, "drift": float(xs[-1, 1] - xs[0, 1]), "side": side,
             "short": short / span, "mismatch": mismatch, "swing": swing,
-            "hip_height": float(np.mean(hips[n0:]))}  # fmt: skip
+            "hip_height": float(np.mean(hips[n0:])),
+            "under3": float((air.sum(1) >= 2).mean())}  # fmt: skip
 
 
 def cost(
@@ -223,6 +231,8 @@ def cost(
     swing_weight: float = 30.0,
     perturb: int = 0,
     kinds: str = "h",
+    support: float = 0.0,
+    short_weight: float = 0.3,
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
@@ -236,15 +246,21 @@ def cost(
         for med, top in zip(s["clear"], s["top"], strict=True):
             c += 100 * max(0.0, 0.032 - med) + 100 * max(0.0, med - 0.048)
             c += 50 * max(0.0, top - 0.058)
-        c += abs(s["drift"]) / 6.0 + 20.0 * s["side"] + 0.3 * s["short"]
+        c += abs(s["drift"]) / 6.0 + 20.0 * s["side"] + short_weight * s["short"]
         c += mismatch * s["mismatch"] + swing_weight * max(0.0, swing - s["swing"])
         c += 100.0 * max(0.0, hip_height - s["hip_height"])
+        c += support * s["under3"]
+        if support:  # a walk may not buy its support by dragging a pair of feet
+            c += sum(1000.0 * max(0.0, 0.02 - med) for med in s["clear"])
     return c
 
 
 def _cma_cost(job) -> float:
     design, seeds, seconds, extra = job
-    return cost(design, seeds, seconds, **extra)
+    try:
+        return cost(design, seeds, seconds, **extra)
+    except ValueError:  # a number out of its range (a negative rate or gain): not a gait
+        return 1e4
 
 
 def _cma_search(args: Args, start: TrotDesign, keys, extra: dict) -> None:
@@ -297,12 +313,13 @@ def main(argv: list[str] | None = None) -> None:
     extra = {"mismatch": args.mismatch, "swing": args.swing, "speed_weight": args.speed_weight,
              "hip_height": args.hip_height, "speed": args.speed,
              "swing_weight": args.swing_weight, "perturb": args.perturb,
-             "kinds": args.kinds}  # fmt: skip
+             "kinds": args.kinds, "support": args.support,
+             "short_weight": args.short_weight}  # fmt: skip
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
 
-    keys = KEYS + GENE_KEYS if args.genes else KEYS
+    keys = KEYS + (WALK_GENE_KEYS if best.walk else GENE_KEYS) if args.genes else KEYS
     if args.cma:
         _cma_search(args, best, keys, extra)
         return

@@ -93,6 +93,10 @@ class Args:
     """Hip interrupt of the HL leg meanwhile (with ``hold_knee``)."""
     hold_from: float = 0.15
     """Seconds after FL's lift-off from which the HL hold applies."""
+    any_lift: bool = False
+    """Take FL's first lift-off after the settling time whatever the CPG's phase (a walk's
+    knee lifts the foot before its hip flexor leads; default: only a lift-off in the CPG's
+    swing, which skips the trot's flickering contacts)."""
     sag: float = 0.0
     """Walking provision s_SAG for t_lift + t_carry + t_drop from the lift-off (either primitive;
     0: unchanged, -0.5: stride scale 0.7; the trot marches in place at about -0.71)."""
@@ -110,15 +114,16 @@ def leg_ik(dx: float, dz: float) -> tuple[float, float]:
     return float(-np.arctan2(dx, -dz) - knee / 2), float(knee)
 
 
-def _lift_off(gym, seed: int, settle: float = 2.0) -> float:
-    """Time of FL's first lift-off after ``settle`` s (sole leaving 4 mm) during a CPG swing."""
+def _lift_off(gym, seed: int, settle: float = 2.0, any_lift: bool = False) -> float:
+    """Time of FL's first lift-off after ``settle`` s (sole leaving 4 mm) during a CPG swing
+    (any lift-off with ``any_lift``)."""
     env = gym.make("NeuroCog/Walk-v1")
     env.reset(seed=seed)
     u = env.unwrapped
     was_down = True
     while u.data.time < settle + 3.0:
         down = u.data.site_xpos[u.robot.foot_site[0], 2] - R_FOOT < 0.004
-        if u.data.time > settle and was_down and not down and u.generator.swinging[0]:
+        if u.data.time > settle and was_down and not down and (any_lift or u.generator.swinging[0]):
             env.close()
             return float(u.data.time)
         was_down = down
@@ -133,7 +138,7 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
 
     from neurocog_gym.robot.obstacles import Block, ObstaclePool
 
-    t_lift = _lift_off(gym, seed)
+    t_lift = _lift_off(gym, seed, any_lift=a.any_lift)
     env = gym.make("NeuroCog/Walk-v1")
     env.reset(seed=seed)
     u = env.unwrapped
@@ -251,7 +256,10 @@ def _prepare_body(a: Args) -> None:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for f in fields(Args):
-        parser.add_argument(f"--{f.name}", type=type(f.default), default=f.default)
+        if isinstance(f.default, bool):
+            parser.add_argument(f"--{f.name}", action="store_true")
+        else:
+            parser.add_argument(f"--{f.name}", type=type(f.default), default=f.default)
     a = Args(**vars(parser.parse_args(argv)))
     if a.body not in ("v1", "knee-behind"):
         parser.error(f"--body must be 'v1' or 'knee-behind', got {a.body!r}")

@@ -43,3 +43,16 @@ def test_body_figures_script_writes_the_body_page(tmp_path):
     _script("body_figures.py", "--seeds", "1", "--swings", "1", "--phases", "2", "--out", out)
     text = out.read_text()
     assert "| thigh, shank | 0.200 m, 0.200 m" in text and "reached 11 cm" in text
+
+
+def test_highstep_tolerance_steps_over_from_the_liftoff_and_refuses_a_bad_trigger():
+    res = _script("highstep_tolerance.py", "--legs", "01", "--every", "2", "--seeds", "1",
+                  "--seconds", "3.5", "--trigger", "liftoff", "--carry", "0.08")  # fmt: skip
+    out = res.stdout
+    assert "from the liftoff" in out and "step-overs (0.08 s carry)" in out
+    n = int(out.split(" step-overs")[0].rsplit(" ", 1)[1])
+    top = float(out.rsplit("median top ", 1)[1].split(" cm")[0])
+    assert n >= 2 and top >= 10.0  # every lifted foot rose to the 10 cm asked
+    bad = subprocess.run([sys.executable, str(ROOT / "scripts" / "highstep_tolerance.py"),
+                          "--trigger", "soon"], capture_output=True, text=True, cwd=ROOT)  # fmt: skip
+    assert bad.returncode == 2 and "--trigger must be" in bad.stderr
