@@ -97,6 +97,8 @@ class Args:
     numbers moved relatively (``--sigma``), near-zero ones absolutely."""
     workers: int = 1
     """Processes evaluating a CMA-ES generation."""
+    liftoff: bool = False
+    """``--perturb``'s disturbances start at the foot's lift-off, not at the CPG's swing onset."""
     short_weight: float = 0.3
     """Cost per short touch-down (a contact under 80 ms) per second."""
     support: float = 0.0
@@ -105,7 +107,8 @@ class Args:
 
 
 def walk_stats(
-    design: TrotDesign, seed: int, seconds: float, perturb: int = 0, kinds: str = "h"
+    design: TrotDesign, seed: int, seconds: float, perturb: int = 0, kinds: str = "h",
+    liftoff: bool = False,
 ) -> dict:
     """Walk the design's gait; fall, speed, clearances, drift, one-side share, short contacts.
 
@@ -114,7 +117,9 @@ def walk_stats(
     high step (knee interrupt +1 until the sole is 10 cm up, then the CPG's swing), ``d`` a
     shortened step (from 0.1 s into the swing hip +1, knee -1 until the foot is down), ``o`` a
     step over (the high step, then hip -1 for 0.08 s, then knee -1 until the foot is down). The
-    other swings are the CPG's; the statistics then describe the disturbed walk.
+    other swings are the CPG's; the statistics then describe the disturbed walk. ``liftoff``:
+    a disturbance starts at the foot's lift-off (sole above 4 mm), not at the CPG's swing
+    onset (a walk's knee lifts the foot before its hip flexor leads).
     """
     env = WalkEnv(gait=build(design))
     env.reset(seed=seed)
@@ -128,6 +133,8 @@ def walk_stats(
         if perturb:
             action[:] = 0.0
             now = env.generator.swinging
+            if liftoff:
+                now = env.data.site_xpos[r.foot_site, 2] - radius > 0.004
             down = env.touch() > 0.05
             for leg in (0, 1):
                 sole = env.data.site_xpos[r.foot_site[leg], 2] - radius
@@ -140,7 +147,7 @@ def walk_stats(
                 k = kind[leg]
                 j = 3 * leg
                 if k == "h":
-                    if now[leg] and sole < 0.10:
+                    if (now[leg] or liftoff) and sole < 0.10 and since[leg] < 0.3:
                         action[j + 2] = 1.0
                     else:
                         kind[leg] = ""
@@ -233,11 +240,12 @@ def cost(
     kinds: str = "h",
     support: float = 0.0,
     short_weight: float = 0.3,
+    liftoff: bool = False,
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
     for seed in range(seeds):
-        s = walk_stats(design, seed, seconds, perturb if seed % 2 else 0, kinds)
+        s = walk_stats(design, seed, seconds, perturb if seed % 2 else 0, kinds, liftoff)
         if s["fell"]:
             c += 100.0 + 10.0 * (seconds - s["t"])
             if "speed" not in s:
@@ -314,7 +322,7 @@ def main(argv: list[str] | None = None) -> None:
              "hip_height": args.hip_height, "speed": args.speed,
              "swing_weight": args.swing_weight, "perturb": args.perturb,
              "kinds": args.kinds, "support": args.support,
-             "short_weight": args.short_weight}  # fmt: skip
+             "short_weight": args.short_weight, "liftoff": args.liftoff}  # fmt: skip
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
