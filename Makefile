@@ -7,7 +7,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 export MUJOCO_GL ?= egl
 
-.PHONY: install demo test test-all lint bench clean
+.PHONY: install demo test test-all lint bench clean clean-cache
 
 $(STAMP): pyproject.toml setup.py
 	$(PYTHON) -m venv $(VENV)
@@ -31,5 +31,10 @@ test-all: $(STAMP)
 lint: $(STAMP)
 	$(VENV)/bin/ruff check . && $(VENV)/bin/ruff format --check .
 
-clean:
+# numba keys its on-disk cache on the file a kernel lives in: a kernel that calls another file's
+# kernel keeps its stale compiled code after that file is edited, until the cache is cleared.
+clean-cache:
+	find neurocog_gym -name '*.nbi' -delete -o -name '*.nbc' -delete
+
+clean: clean-cache
 	rm -rf $(VENV) build dist *.egg-info runs
