@@ -91,22 +91,30 @@ def build_adjacency(valid, edges, slack):
         slack: free slots per non-isolated row, for the quad diagonals.
 
     Returns:
-        ``(fwd, fstart, fcap, fdeg, adj, aeid, start, cap, deg, n_bad)``: the forward rows (each
-        node's higher neighbours; the slot of ``hi`` in row ``lo`` is the id of edge ``lo-hi``),
-        the full rows with the edge id of each slot, and the number of edges with an index
-        outside [0, n).
+        ``(fwd, fstart, fcap, fdeg, adj, aeid, start, cap, deg, n_bad, fsrc)``: the forward
+        rows (each node's higher neighbours; the slot of ``hi`` in row ``lo`` is the id of edge
+        ``lo-hi``; free slots hold -1), the full rows with the edge id of each slot, the number
+        of edges with an index outside [0, n), and the row of each used forward slot.
     """
     n = valid.shape[0]
     m = edges.shape[0]
     deg = np.zeros(n, np.int64)
     fdeg = np.zeros(n, np.int64)
     n_bad = 0
+    # Edges as a GNG exports them, (i, j) with i < j in strictly rising order, hold no
+    # duplicate: the fill then skips the duplicate scan, a loop of data-dependent length per
+    # edge (its exit is a mispredicted branch more often than not).
+    ordered = True
+    prev = -1
     for e in range(m):
         a = edges[e, 0]
         b = edges[e, 1]
         if a < 0 or b < 0 or a >= n or b >= n:
             n_bad += 1
             continue
+        key = a * n + b
+        ordered &= (a < b) & (key > prev)
+        prev = key
         if a != b and valid[a] and valid[b]:
             deg[a] += 1
             deg[b] += 1
@@ -128,7 +136,9 @@ def build_adjacency(valid, edges, slack):
     fstart[n] = ftotal
     adj = np.empty(max(total, 1), np.int32)
     aeid = np.empty(max(total, 1), np.int32)
-    fwd = np.empty(max(ftotal, 1), np.int32)
+    # Free (slack) forward slots hold -1; ``fsrc`` is each used slot's row.
+    fwd = np.full(max(ftotal, 1), -1, np.int32)
+    fsrc = np.zeros(max(ftotal, 1), np.int32)
     deg[:] = 0
     fdeg[:] = 0
     for e in range(m):
@@ -138,17 +148,19 @@ def build_adjacency(valid, edges, slack):
             continue
         lo = min(a, b)
         hi = max(a, b)
-        # Duplicate edges: scan the (short) forward row; no helper call in the hot loop.
-        s = fstart[lo]
-        dup = False
-        for k in range(fdeg[lo]):
-            if fwd[s + k] == hi:
-                dup = True
-                break
-        if dup:
-            continue
+        if not ordered:
+            # Duplicate edges: scan the (short) forward row; no helper call in the hot loop.
+            s = fstart[lo]
+            dup = False
+            for k in range(fdeg[lo]):
+                if fwd[s + k] == hi:
+                    dup = True
+                    break
+            if dup:
+                continue
         eid = fstart[lo] + fdeg[lo]
         fwd[eid] = hi
+        fsrc[eid] = lo
         fdeg[lo] += 1
         s = start[lo] + deg[lo]
         adj[s] = hi
@@ -158,7 +170,7 @@ def build_adjacency(valid, edges, slack):
         adj[s] = lo
         aeid[s] = eid
         deg[hi] += 1
-    return fwd, fstart, fcap, fdeg, adj, aeid, start, cap, deg, n_bad
+    return fwd, fstart, fcap, fdeg, adj, aeid, start, cap, deg, n_bad, fsrc
 
 
 @njit(cache=True)
@@ -168,7 +180,8 @@ def triangulate_graph(nodes, edges, origin, away, max_facets, min_quality):
     Runs :func:`_triangulate_once` with a capacity for a surface mesh (1.5 facets per edge) and
     retries with twice the capacity, up to ``max_facets``, if that was too small. (Growing the
     arrays inside the enumeration loop instead makes numba refcount them on every iteration,
-    which tripled the run time.)
+    which tripled the run time.) Only the last attempt, whose truncation is kept, tries every
+    node as a quad's start (see :func:`_triangulate_once`).
 
     Returns:
         As :func:`_triangulate_once`; ``truncated`` means ``max_facets`` was reached.
@@ -177,7 +190,7 @@ def triangulate_graph(nodes, edges, origin, away, max_facets, min_quality):
     fcap = max(16, min(max_facets, m + m // 2 + 16))
     while True:
         fi, ff, nf, truncated, n_bad, ecnt, eface = _triangulate_once(
-            nodes, edges, origin, away, fcap, min_quality
+            nodes, edges, origin, away, fcap, min_quality, fcap >= max_facets
         )
         if not truncated or fcap >= max_facets:
             return fi, ff, nf, truncated, n_bad, ecnt, eface
@@ -185,7 +198,7 @@ def triangulate_graph(nodes, edges, origin, away, max_facets, min_quality):
 
 
 @njit(cache=True)
-def _triangulate_once(nodes, edges, origin, away, fcap, min_quality):
+def _triangulate_once(nodes, edges, origin, away, fcap, min_quality, all_starts):
     """One triangulation pass with facet capacity ``fcap``.
 
     Every 3-cycle is a facet. A chordless 4-cycle whose four edges each border at most one
@@ -206,6 +219,11 @@ def _triangulate_once(nodes, edges, origin, away, fcap, min_quality):
         away: bool, orient away from ``origin`` (the caller passes the node centroid).
         fcap: facet capacity; enumeration stops there.
         min_quality: sliver threshold on 2 * area / longest_edge**2 (equilateral: 0.866).
+        all_starts: try every node with two low edges as a quad's lowest node. Without it only
+            those with two low edges up are tried, which finds the same quads unless the
+            capacity runs out (then a diagonal may be left with fewer than two facets, hence
+            low, and serve as a later quad's edge); a truncated result is only kept from the
+            last attempt, which sets it.
 
     Returns:
         ``(fi, ff, nf, truncated, n_bad, ecnt, eface)``: facet arrays (first ``nf`` rows
@@ -215,7 +233,7 @@ def _triangulate_once(nodes, edges, origin, away, fcap, min_quality):
     """
     n = nodes.shape[0]
     valid = finite_rows(nodes)
-    fwd, fstart, fcapr, fdeg, adj, aeid, start, cap, deg, n_bad = build_adjacency(
+    fwd, fstart, fcapr, fdeg, adj, aeid, start, cap, deg, n_bad, fsrc = build_adjacency(
         valid, edges, SLACK
     )
     ne = max(fstart[n], 1)
@@ -258,38 +276,55 @@ def _triangulate_once(nodes, edges, origin, away, fcap, min_quality):
                 nc += 1
 
     # Low edges (at most one facet), both directions, as CSR: a quad hole has only low edges.
+    # A fifth of the edges are low. Their slots are listed first in one flat pass over the
+    # forward slots (in slot order, which is row order), each slot written and counted by
+    # whether it is low: the nested passes over the rows this replaces paid a mispredicted
+    # branch per row end and per low test, on patterns that change from graph to graph.
+    nslot = fstart[n]
+    lows = np.empty(max(nslot, 1), np.int32)
+    nlow = 0
+    for e in range(nslot):
+        lows[nlow] = e
+        nlow += (fwd[e] >= 0) & (ecnt[e] <= 1)
     lcnt = np.zeros(n + 1, np.int64)
-    for u in range(n):
-        fu = fstart[u]
-        for k in range(fdeg[u]):
-            if ecnt[fu + k] <= 1:
-                lcnt[u + 1] += 1
-                lcnt[fwd[fu + k] + 1] += 1
+    lup = np.zeros(n, np.int64)
+    for q in range(nlow):
+        e = lows[q]
+        lcnt[fsrc[e] + 1] += 1
+        lcnt[fwd[e] + 1] += 1
+        lup[fsrc[e]] += 1
     for i in range(n):
         lcnt[i + 1] += lcnt[i]
     lfill = lcnt[:n].copy()
     low = np.empty(max(lcnt[n], 1), np.int32)
     leid = np.empty(max(lcnt[n], 1), np.int32)
-    for u in range(n):
-        fu = fstart[u]
-        for k in range(fdeg[u]):
-            if ecnt[fu + k] <= 1:
-                v = fwd[fu + k]
-                low[lfill[u]] = v
-                leid[lfill[u]] = fu + k
-                lfill[u] += 1
-                low[lfill[v]] = u
-                leid[lfill[v]] = fu + k
-                lfill[v] += 1
+    for q in range(nlow):
+        e = lows[q]
+        u = fsrc[e]
+        v = fwd[e]
+        low[lfill[u]] = v
+        leid[lfill[u]] = e
+        lfill[u] += 1
+        low[lfill[v]] = u
+        leid[lfill[v]] = e
+        lfill[v] += 1
+    # The nodes a quad can start from, listed the same way, in rising order: its lowest node
+    # a has two low edges up, to b and to d (b < d; an edge a-d low when the quad is checked
+    # was low here, as edge counts only grow, or is a diagonal added since, which has two
+    # facets unless the capacity ran out). Most boundary nodes have one.
+    qa = np.empty(n, np.int64)
+    nqa = 0
+    for a in range(n):
+        qa[nqa] = a
+        nqa += (lup[a] >= 2) | (all_starts & (lcnt[a + 1] - lcnt[a] >= 2))
 
     # Quad holes a-b-c-d over low edges, found once from their lowest node a with b < d.
     mark[:] = -1
     mark2 = np.full(n, -1, np.int64)
     mslot2 = np.empty(n, np.int64)
     ndiag = 0
-    for a in range(n):
-        if lcnt[a + 1] - lcnt[a] < 2:
-            continue
+    for ia in range(nqa):
+        a = qa[ia]
         fa = fstart[a]
         for k in range(fdeg[a]):
             mark[fwd[fa + k]] = a
@@ -1559,15 +1594,27 @@ def map_objects_kernel(
     n = nodes.shape[0]
     out = np.zeros((ngroups, N_MAP_COLS))
     stamp = np.full(n, -1, np.int64)
-    order = np.argsort(fgroup, kind="mergesort")
+    # The facets grouped by group, in facet order within a group (a counting sort: the order
+    # of a stable argsort, without its sort; the facets of no group are left out).
+    nf = fgroup.shape[0]
+    gstart = np.zeros(ngroups + 1, np.int64)
+    for f in range(nf):
+        if fgroup[f] >= 0:
+            gstart[fgroup[f] + 1] += 1
+    for g in range(ngroups):
+        gstart[g + 1] += gstart[g]
+    order = np.empty(gstart[ngroups], np.int64)
+    gfill = gstart[:ngroups].copy()
+    for f in range(nf):
+        g = fgroup[f]
+        if g >= 0:
+            order[gfill[g]] = f
+            gfill[g] += 1
     # Up to 62 groups, one pass over the edges for all of them (each node's groups as bits of
     # ``member``) instead of one pass per group; the spacings are the same medians.
     bits = ngroups <= 62
     member = np.zeros(n if bits else 0, np.int64)
     lens = np.empty(1 if bits else max(edges.shape[0], 1))  # the per-group pass's lengths
-    q = 0
-    while q < order.shape[0] and fgroup[order[q]] < 0:
-        q += 1
     for g in range(ngroups):
         out[g, M_HEIGHT] = -np.inf
         out[g, M_F0] = np.inf
@@ -1583,9 +1630,8 @@ def map_objects_kernel(
             out[g, M_HBOX + 2 + d] = -np.inf
         # The group's facets are contiguous in ``order``; ``stamp`` marks its nodes (a node
         # on facets of two groups counts in both).
-        while q < order.shape[0] and fgroup[order[q]] == g:
+        for q in range(gstart[g], gstart[g + 1]):
             f = order[q]
-            q += 1
             for c in range(3):
                 v = facets[f, c]
                 if stamp[v] == g:
@@ -1964,3 +2010,45 @@ def map_step_kernel(
                 sboxes[q, 1, d] = obox[i, 1, d] + pad
             q += 1
     return olab, opos, onormal, obox, oflabels, merged[:nmerged], sboxes, ground
+
+
+@njit(cache=True)
+def detect_map_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm, mq):
+    """:func:`detect_kernel` and then :func:`map_step_kernel`, in one compiled call ("map" mode).
+
+    The pipeline's map-mode detection (``AttentionPipeline._detect_map``) without a return to
+    Python between the two: the detection's arrays go straight into the map step. The map step
+    runs when the detection found facets, every edge index was valid, its ground level is
+    finite and the facets face ``origin`` (``mode`` without ``MODE_ORIENT_AWAY``); otherwise the
+    detection's arrays come back as they are.
+
+    Args:
+        nodes: (n, 3) float64, metres.
+        edges: (m, 2) int64.
+        origin: (3,) float64, metres, the sensors.
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        ground_z: metres, used with ``MODE_GROUND_KNOWN``; else the ground is estimated.
+        mode: bit mask of ``MODE_*``.
+        prm: (N_PARAMS,) float64 packed detection parameters (``P_*``).
+        mq: (N_MAP_PARAMS,) float64 map-mode parameters (``Q_*``).
+
+    Returns:
+        ``(n_bad, truncated, ground, facets, normals, flabels, lab, pos, normal, box, sboxes,
+        merged)``: as :func:`detect_kernel`'s, after the map step (``merged``: the labels whose
+        normals come unnormalised, see :func:`map_step_kernel`; empty without the step).
+    """
+    n_bad, truncated, ground, facets, normals, flabels, lab, pos, normal, box, sboxes = (
+        detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm)
+    )
+    merged = np.zeros(0, np.int64)
+    if (
+        n_bad == 0
+        and facets.shape[0] > 0
+        and (mode & MODE_ORIENT_AWAY) == 0
+        and np.isfinite(ground)
+    ):
+        lab, pos, normal, box, flabels, merged, sboxes, ground = map_step_kernel(
+            nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box, prm, mq
+        )
+    return n_bad, truncated, ground, facets, normals, flabels, lab, pos, normal, box, sboxes, merged

@@ -81,11 +81,12 @@ from neurocog_gym.perception.affordance import (
     AffordanceObject,
     AffordanceParams,
     Affordances,
+    _check_graph,
+    _empty_result,
     _forward_xy,
     _origin,
     assemble,
     detect_affordances,
-    detect_raw,
 )
 from neurocog_gym.perception.gng import DDGNG, GNG, MLGNG, DDGNGParams
 
@@ -486,23 +487,28 @@ class AttentionPipeline:
         """
         p, ap = self.params, self.affordance_params
         nodes, edges = self.net.nodes, self.net.edges
-        raw = detect_raw(nodes, edges, sensor_origin, ap, forward, ground_z)
-        if isinstance(raw, Affordances):
-            return raw
-        ground, truncated, facets, normals, flabels, lab, pos, normal, box, _ = raw
-        if sensor_origin is None or not math.isfinite(ground):
-            return assemble(*raw)
-        origin, _ = _origin(sensor_origin)  # checked by detect_raw; its fast path
+        if sensor_origin is None:
+            return detect_affordances(nodes, edges, None, ap, forward, ground_z)
+        # The checks of detect_raw, then the detection and the steps in one compiled call.
+        nodes, edges = _check_graph(nodes, edges)
+        origin, _ = _origin(sensor_origin)
         fx, fy = _forward_xy(forward)
-        olab, opos, onormal, obox, oflabels, merged, sboxes, ground = _k.map_step_kernel(
-            nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box,
-            ap.packed, p.map_packed if ground_z is None else p.map_packed_known_ground,
-        )  # fmt: skip
-        if olab is lab:
-            return assemble(ground, *raw[1:])  # no object: nothing else to do
-        aff = assemble(
-            ground, truncated, facets, normals, oflabels, olab, opos, onormal, obox, sboxes
+        if ground_z is not None and not math.isfinite(ground_z):
+            raise ValueError(f"ground_z must be finite or None, got {ground_z!r}")
+        if nodes.shape[0] < 3 or edges.shape[0] < 3:
+            return _empty_result(ground_z)
+        if ground_z is None:
+            mode, ground, mq = 0, 0.0, p.map_packed
+        else:
+            mode, ground, mq = _k.MODE_GROUND_KNOWN, float(ground_z), p.map_packed_known_ground
+        n_bad, truncated, ground, facets, *arrays, merged = _k.detect_map_kernel(
+            nodes, edges, origin, fx, fy, ground, mode, ap.packed, mq
         )
+        if n_bad:
+            raise ValueError(f"{n_bad} edges index nodes outside [0, {nodes.shape[0]})")
+        if facets.shape[0] == 0:
+            return _empty_result(ground_z)
+        aff = assemble(ground, truncated, facets, *arrays)
         if len(merged):
             # The merged normals come unnormalised: normalised as np.linalg.norm does it,
             # sqrt(x . x) (its rounding differs from sqrt(x² + y² + z²) in one case in ten).
