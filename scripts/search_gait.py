@@ -107,7 +107,11 @@ class Args:
 
 
 def walk_stats(
-    design: TrotDesign, seed: int, seconds: float, perturb: int = 0, kinds: str = "h",
+    design: TrotDesign,
+    seed: int,
+    seconds: float,
+    perturb: int = 0,
+    kinds: str = "h",
     liftoff: bool = False,
 ) -> dict:
     """Walk the design's gait; fall, speed, clearances, drift, one-side share, short contacts.

@@ -53,6 +53,7 @@ def test_highstep_tolerance_steps_over_from_the_liftoff_and_refuses_a_bad_trigge
     n = int(out.split(" step-overs")[0].rsplit(" ", 1)[1])
     top = float(out.rsplit("median top ", 1)[1].split(" cm")[0])
     assert n >= 2 and top >= 10.0  # every lifted foot rose to the 10 cm asked
-    bad = subprocess.run([sys.executable, str(ROOT / "scripts" / "highstep_tolerance.py"),
-                          "--trigger", "soon"], capture_output=True, text=True, cwd=ROOT)  # fmt: skip
+    script = str(ROOT / "scripts" / "highstep_tolerance.py")
+    bad = subprocess.run([sys.executable, script, "--trigger", "soon"],
+                         capture_output=True, text=True, cwd=ROOT)  # fmt: skip
     assert bad.returncode == 2 and "--trigger must be" in bad.stderr
