@@ -243,10 +243,19 @@ def _triangulate_once(nodes, edges, origin, away, fcap, min_quality, all_starts)
     nc = 0
     truncated = False
     mark = np.full(n, -1, np.int64)
-    mslot = np.empty(n, np.int64)
+    mslot = np.zeros(n, np.int64)
 
-    # All 3-cycles u < v < w over the forward rows; every edge of one is a forward edge.
+    # All 3-cycles u < v < w over the forward rows; every edge of one is a forward edge. Its
+    # lowest node u has two forward neighbours: the others (a third of a GNG's nodes) are
+    # left out of the loop beforehand, in one flat pass, not skipped in it (each skip, and
+    # each end of their short rows, was a mispredicted branch as often as not).
+    us = np.empty(n, np.int64)
+    nus = 0
     for u in range(n):
+        us[nus] = u
+        nus += fdeg[u] >= 2
+    for iu in range(nus):
+        u = us[iu]
         fu = fstart[u]
         for k in range(fdeg[u]):
             mark[fwd[fu + k]] = u
@@ -255,11 +264,13 @@ def _triangulate_once(nodes, edges, origin, away, fcap, min_quality, all_starts)
             v = fwd[fu + k]
             fv = fstart[v]
             for k2 in range(fdeg[v]):
+                # Each (u, v, w) written and counted by whether it closes a triangle, without
+                # a branch on it (which pairs do is a pattern no predictor learns across
+                # graphs). ``mslot`` of a node not marked for ``u`` is a valid slot, counted 0.
                 w = fwd[fv + k2]
-                if mark[w] != u:
-                    continue
+                hit = np.int32(mark[w] == u)
                 if nc >= fcap:
-                    truncated = True
+                    truncated |= hit != 0
                     continue
                 e0 = fu + k
                 e1 = fv + k2
@@ -270,10 +281,10 @@ def _triangulate_once(nodes, edges, origin, away, fcap, min_quality, all_starts)
                 cand[nc, 3] = e0
                 cand[nc, 4] = e1
                 cand[nc, 5] = e2
-                ecnt[e0] += 1
-                ecnt[e1] += 1
-                ecnt[e2] += 1
-                nc += 1
+                ecnt[e0] += hit
+                ecnt[e1] += hit
+                ecnt[e2] += hit
+                nc += hit
 
     # Low edges (at most one facet), both directions, as CSR: a quad hole has only low edges.
     # A fifth of the edges are low. Their slots are listed first in one flat pass over the
@@ -480,7 +491,7 @@ def _triangulate_once(nodes, edges, origin, away, fcap, min_quality, all_starts)
 
     # Edge-to-facet table of the kept facets.
     ecnt[:] = 0
-    eface = np.empty((ne, MAX_PER_EDGE), np.int32)
+    eface = np.zeros((ne, MAX_PER_EDGE), np.int32)
     for f in range(nf):
         for e in range(3):
             eid = fi[f, 3 + e]
@@ -503,14 +514,26 @@ def facet_links(fi, ff, nf, ecnt, eface):
         ``cos w_ij`` (-2 without link). Eq. (2) is ``w_ij = arccos(ncos)``; the kernels compare
         cosines, which is the same test without the arccos.
     """
-    nbr = np.full((nf, 3), -1, np.int64)
-    ncos = np.full((nf, 3), -2.0)
+    nbr = np.empty((nf, 3), np.int64)
+    ncos = np.empty((nf, 3))
     for f in range(nf):
         for e in range(3):
             eid = fi[f, 3 + e]
+            cnt = ecnt[eid]
+            if cnt <= 2:
+                # Nearly every edge: the facet and at most one other, in either order. The
+                # other is the pair's sum minus ``f`` (slot 1 is zero-filled on a boundary
+                # edge, which then has no link): no branch on the order, which is as random
+                # as the graph.
+                g = eface[eid, 0] + eface[eid, 1] - f
+                c = ff[f, 0] * ff[g, 0] + ff[f, 1] * ff[g, 1] + ff[f, 2] * ff[g, 2]
+                two = cnt == 2
+                nbr[f, e] = g if two else -1
+                ncos[f, e] = c if two else -2.0
+                continue
             best = -1
             bestc = -2.0
-            for q in range(min(ecnt[eid], MAX_PER_EDGE)):
+            for q in range(min(cnt, MAX_PER_EDGE)):
                 g = eface[eid, q]
                 if g == f:
                     continue
@@ -1753,17 +1776,17 @@ def floor_level(nodes, facets, flabels, lab, ground):
     """
     n = nodes.shape[0]
     seen = np.zeros(n, np.bool_)
-    zs = np.empty(n)
+    zs = np.empty(n + 1)
     k = 0
+    # Each node's height written and counted by whether it is a terrain facet's and new (no
+    # branch on either: they follow the graph); the median does not depend on the order.
     for f in range(facets.shape[0]):
-        if lab[flabels[f], L_KIND] != KIND_TERRAIN:
-            continue
+        terrain = lab[flabels[f], L_KIND] == KIND_TERRAIN
         for c in range(3):
             v = facets[f, c]
-            if not seen[v]:
-                seen[v] = True
-                zs[k] = nodes[v, 2]
-                k += 1
+            zs[k] = nodes[v, 2]
+            k += terrain & (not seen[v])
+            seen[v] |= terrain
     if k == 0:
         return ground
     return np.median(zs[:k])

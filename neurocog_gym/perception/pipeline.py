@@ -508,17 +508,21 @@ class AttentionPipeline:
             raise ValueError(f"{n_bad} edges index nodes outside [0, {nodes.shape[0]})")
         if facets.shape[0] == 0:
             return _empty_result(ground_z)
-        aff = assemble(ground, truncated, facets, *arrays)
         if len(merged):
             # The merged normals come unnormalised: normalised as np.linalg.norm does it,
-            # sqrt(x . x) (its rounding differs from sqrt(x² + y² + z²) in one case in ten).
+            # sqrt(x . x) (its rounding differs from sqrt(x² + y² + z²) in one case in ten),
+            # in the kernel's arrays before the records are made from them.
+            lab, normal = arrays[2], arrays[4]
             for j in merged.tolist():
-                o = aff.objects[j]
-                nsum = o.normal
+                nsum = normal[j]
                 nn = math.sqrt(float(nsum.dot(nsum)))
-                unit = nsum / nn if nn > 1e-12 else np.zeros(3)
-                gamma = math.acos(min(1.0, max(-1.0, float(unit[2])))) if nn > 1e-12 else 0.0
-                aff.objects[j] = o._replace(normal=unit, gamma=gamma)
+                if nn > 1e-12:
+                    normal[j] = nsum / nn
+                    lab[j, _k.L_GAMMA] = math.acos(min(1.0, max(-1.0, float(normal[j, 2]))))
+                else:
+                    normal[j] = 0.0
+                    lab[j, _k.L_GAMMA] = 0.0
+        aff = assemble(ground, truncated, facets, *arrays)
         return aff
 
     def _refine(
