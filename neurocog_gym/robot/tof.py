@@ -47,8 +47,8 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from numba import njit
 
+from neurocog_gym.robot import _tof_kernels as _k
 from neurocog_gym.robot.names import RAY_GEOM_GROUPS, TOF_SITES
 
 FULL_WIDTH: int = 224
@@ -60,16 +60,6 @@ MAX_FPS: float = 45.0
 
 _BACKENDS = ("mujoco", "numba")
 _TIME_EPS = 1e-9  # s; absorbs float error of sums like 3 * 0.01 against k / fps
-_MINVAL = 1e-15  # MuJoCo's mjMINVAL
-_PLANE, _SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX = (
-    int(mujoco.mjtGeom.mjGEOM_PLANE),
-    int(mujoco.mjtGeom.mjGEOM_SPHERE),
-    int(mujoco.mjtGeom.mjGEOM_CAPSULE),
-    int(mujoco.mjtGeom.mjGEOM_ELLIPSOID),
-    int(mujoco.mjtGeom.mjGEOM_CYLINDER),
-    int(mujoco.mjtGeom.mjGEOM_BOX),
-)
-_PRIMITIVES = (_PLANE, _SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX)
 
 
 @dataclass(frozen=True)
@@ -249,8 +239,16 @@ class ToFArray:
 
         s, n = p.n_sensors, p.width * p.height
         self._n = n
-        self._vec = np.zeros((s, 3, n))  # world-frame rays, a row per axis
-        self._dist = np.zeros((s, n))
+        # mujoco backend: world-frame rays (a row per axis) and ray lengths of the whole frame;
+        # the numba backend casts a tile of rows at a time in ``_tile_*`` instead.
+        whole = n if p.backend == "mujoco" else 0
+        self._vec = np.zeros((s, 3, whole))
+        self._dist = np.zeros((s, whole))
+        tile = max(1, _k.TILE_RAYS // p.width) * p.width
+        self._tile_vec = np.zeros((3, tile))
+        self._tile_dist = np.zeros(tile)
+        self._tile_geomid = np.zeros(tile, dtype=np.int32)
+        self._tile_points = np.zeros((3, tile), dtype=np.float32)
         self._geomid = np.zeros((s, n), dtype=np.int32)
         self._gauss = np.zeros((s, n))
         self._unif = np.ones((s, n))
@@ -268,10 +266,12 @@ class ToFArray:
         group = np.clip(model.geom_group, 0, len(self._geomgroup) - 1)
         self._cand = np.flatnonzero(self._geomgroup[group] != 0).astype(np.int64)
         self._cone_cos = float(self._cos_axis.min())
-        self._table = np.zeros((len(self._cand), _T_LEN))
+        self._tan_h = math.tan(math.radians(p.h_fov_deg) / 2)
+        self._tan_v = math.tan(math.radians(p.v_fov_deg) / 2)
+        self._table = np.zeros((len(self._cand), _k.T_LEN))
         self._table_id = np.zeros(len(self._cand), dtype=np.int32)
         if p.backend == "numba":
-            bad = [g for g in self._cand if model.geom_type[g] not in _PRIMITIVES]
+            bad = [g for g in self._cand if model.geom_type[g] not in _k.PRIMITIVES]
             if bad:
                 g = int(bad[0])
                 kind = mujoco.mjtGeom(int(model.geom_type[g])).name
@@ -352,8 +352,48 @@ class ToFArray:
         """
         p = self.params
         m = self.model
-        if p.backend == "mujoco":
-            _rotate_rays(self._dirs_t, data.site_xmat, self.site_ids, self._vec)
+        if self._noisy:
+            self._rng.standard_normal(out=self._gauss)
+            self._rng.random(out=self._unif)
+        if p.backend == "numba":
+            total = _k.cast_frame(
+                self._dirs_t,
+                self._cone_cos,
+                self._tan_h,
+                self._tan_v,
+                p.width,
+                data.site_xpos,
+                data.site_xmat,
+                self.site_ids,
+                self._cand,
+                m.geom_type,
+                m.geom_size,
+                m.geom_rgba,
+                m.geom_matid,
+                m.mat_rgba,
+                data.geom_xpos,
+                data.geom_xmat,
+                p.min_range,
+                p.max_range,
+                p.noise_std_rel,
+                p.dropout,
+                self._gauss,
+                self._unif,
+                self._table,
+                self._table_id,
+                self._tile_vec,
+                self._tile_dist,
+                self._tile_geomid,
+                self._tile_points,
+                self._depth,
+                self._valid,
+                self._geomid,
+                self._points,
+                self._origins,
+                self._counts,
+            )
+        else:
+            _k.rotate_rays(self._dirs_t, data.site_xmat, self.site_ids, self._vec)
             for i, sid in enumerate(self.site_ids):
                 mujoco.mj_multiRay(
                     m,
@@ -369,50 +409,25 @@ class ToFArray:
                     self._n,
                     p.max_range,
                 )
-        else:
-            _cast_primitives(
-                self._dirs_t,
-                self._cone_cos,
-                data.site_xpos,
-                data.site_xmat,
-                self.site_ids,
-                self._cand,
-                m.geom_type,
-                m.geom_size,
-                m.geom_rgba,
-                m.geom_matid,
-                m.mat_rgba,
-                data.geom_xpos,
-                data.geom_xmat,
-                p.max_range,
-                self._table,
-                self._table_id,
+            total = _k.pack_frame(
                 self._vec,
+                self._cos_axis,
+                data.site_xpos,
+                self.site_ids,
                 self._dist,
                 self._geomid,
+                p.min_range,
+                p.max_range,
+                p.noise_std_rel,
+                p.dropout,
+                self._gauss,
+                self._unif,
+                self._depth,
+                self._valid,
+                self._points,
+                self._origins,
+                self._counts,
             )
-        if self._noisy:
-            self._rng.standard_normal(out=self._gauss)
-            self._rng.random(out=self._unif)
-        total = _pack(
-            self._vec,
-            self._cos_axis,
-            data.site_xpos,
-            self.site_ids,
-            self._dist,
-            self._geomid,
-            p.min_range,
-            p.max_range,
-            p.noise_std_rel,
-            p.dropout,
-            self._gauss,
-            self._unif,
-            self._depth,
-            self._valid,
-            self._points,
-            self._origins,
-            self._counts,
-        )
         if copy:
             shape = (p.n_sensors, p.height, p.width)
             arrays = (
@@ -438,434 +453,3 @@ class ToFArray:
                 a.flags.writeable = False
             self._views = views
         return ToFFrame(points, *self._views, time=float(data.time))
-
-
-# ---------------------------------------------------------------------------------------------
-# Kernels: pure functions over arrays; the class above owns the buffers. Site and geom poses are
-# copied into local scalars before the per-ray loops: numba cannot prove that the output buffers
-# do not alias them, and would reload them for every ray otherwise.
-
-
-@njit(cache=True)
-def _rotate_rays(dirs_t, site_xmat, site_ids, out):  # pragma: no cover - compiled
-    """Rotate site-frame rays into the world: ``out[s, :, k] = R_s @ dirs_t[:, k]``.
-
-    Rays are stored a row per axis (x, y, z), so that this loop and the casts' loops over the
-    rays vectorise (strided rows of three keep them scalar).
-
-    Args:
-        dirs_t: (3, n) float64, unit rays in the site frame, a row per axis.
-        site_xmat: (nsite, 9) float64, row-major site orientations (``data.site_xmat``).
-        site_ids: (S,) int64, the sensors' site ids.
-        out: (S, 3, n) float64, written.
-    """
-    for s in range(site_ids.shape[0]):
-        i = site_ids[s]
-        r0, r1, r2 = site_xmat[i, 0], site_xmat[i, 1], site_xmat[i, 2]
-        r3, r4, r5 = site_xmat[i, 3], site_xmat[i, 4], site_xmat[i, 5]
-        r6, r7, r8 = site_xmat[i, 6], site_xmat[i, 7], site_xmat[i, 8]
-        for k in range(dirs_t.shape[1]):
-            d0, d1, d2 = dirs_t[0, k], dirs_t[1, k], dirs_t[2, k]
-            out[s, 0, k] = r0 * d0 + r1 * d1 + r2 * d2
-            out[s, 1, k] = r3 * d0 + r4 * d1 + r5 * d2
-            out[s, 2, k] = r6 * d0 + r7 * d1 + r8 * d2
-
-
-# nogil: the two kernels of a frame that run long enough (0.02-0.4 ms) for another thread to
-# use the GIL meanwhile (BatchVectorEnv steps sub-envs on threads); the short ones keep it, a
-# GIL hand-over costs tens of microseconds.
-@njit(cache=True, nogil=True)
-def _pack(
-    vec,
-    cos_axis,
-    site_xpos,
-    site_ids,
-    dist,
-    geomid,
-    min_range,
-    max_range,
-    noise_std_rel,
-    dropout,
-    gauss,
-    unif,
-    depth,
-    valid,
-    points,
-    origins,
-    counts,
-):  # pragma: no cover - compiled
-    """Apply noise and the range gate, write depth, validity and packed world points.
-
-    Args:
-        vec: (S, 3, n) float64, unit rays in the world frame (:func:`_rotate_rays`).
-        cos_axis: (n,) float64, cosine of each ray to the optical axis (z-depth = d · cos).
-        site_xpos: (nsite, 3) float64, metres, site positions (``data.site_xpos``).
-        site_ids: (S,) int64, the sensors' site ids.
-        dist: (S, n) float64, metres, ray length to the hit, < 0 for none.
-        geomid: (S, n) int32, geom hit; set to -1 where the pixel ends up invalid.
-        min_range: metres, nearest valid ray length.
-        max_range: metres, farthest valid ray length.
-        noise_std_rel: σ_d / d, 1.
-        dropout: probability a valid pixel is dropped, 1.
-        gauss: (S, n) float64, standard normal draws (read only if noise_std_rel > 0).
-        unif: (S, n) float64, uniform [0, 1) draws (read only if dropout > 0).
-        depth: (S, n) float32, metres, written (0 where invalid).
-        valid: (S, n) bool, written.
-        points: (S·n, 3) float32, metres, world frame; the first ``total`` rows are written.
-        origins: (S, 3) float64, metres, written with the sensor positions.
-        counts: (S,) int64, written with points per sensor.
-
-    Returns:
-        total, the number of points written.
-    """
-    noisy = noise_std_rel > 0.0
-    drop = dropout > 0.0
-    total = 0
-    for s in range(site_ids.shape[0]):
-        i = site_ids[s]
-        o0, o1, o2 = site_xpos[i, 0], site_xpos[i, 1], site_xpos[i, 2]
-        origins[s, 0], origins[s, 1], origins[s, 2] = o0, o1, o2
-        start = total
-        for k in range(vec.shape[2]):
-            d = dist[s, k]
-            ok = d >= 0.0
-            if ok and noisy:
-                d = d * (1.0 + noise_std_rel * gauss[s, k])
-            if ok and drop and unif[s, k] < dropout:
-                ok = False
-            if ok and (d < min_range or d > max_range):
-                ok = False
-            valid[s, k] = ok
-            if not ok:
-                depth[s, k] = 0.0
-                geomid[s, k] = -1
-                continue
-            depth[s, k] = d * cos_axis[k]
-            points[total, 0] = o0 + d * vec[s, 0, k]
-            points[total, 1] = o1 + d * vec[s, 1, k]
-            points[total, 2] = o2 + d * vec[s, 2, k]
-            total += 1
-        counts[s] = total - start
-    return total
-
-
-@njit(cache=True, inline="always")
-def _quad_roots(a, b, c):  # pragma: no cover - compiled
-    """Roots of a·x² + 2b·x + c = 0 as MuJoCo's ray_quad; (-1, -1) if none."""
-    det = b * b - a * c
-    if det < _MINVAL:
-        return -1.0, -1.0
-    det = math.sqrt(det)
-    return (-b - det) / a, (-b + det) / a
-
-
-@njit(cache=True, inline="always")
-def _first_root(a, b, c):  # pragma: no cover - compiled
-    """Nearest non-negative root of a·x² + 2b·x + c = 0, -1 if none (MuJoCo's ray_quad)."""
-    x0, x1 = _quad_roots(a, b, c)
-    if x0 >= 0.0:
-        return x0
-    if x1 >= 0.0:
-        return x1
-    return -1.0
-
-
-@njit(cache=True, inline="always")
-def _take(x, sol):  # pragma: no cover - compiled
-    """The nearer of two ray lengths, -1 meaning none."""
-    if sol >= 0.0 and (x < 0.0 or sol < x):
-        return sol
-    return x
-
-
-@njit(cache=True, inline="always")
-def _ray_box_face(x, lpi, lvi, si, lpj, lvj, sj, lpk, lvk, sk):  # pragma: no cover - compiled
-    """Nearer of ``x`` and the hits on the two box faces normal to local axis i."""
-    if abs(lvi) > _MINVAL:
-        for side in (-1.0, 1.0):
-            sol = (side * si - lpi) / lvi
-            if sol >= 0.0 and abs(lpj + sol * lvj) <= sj and abs(lpk + sol * lvk) <= sk:
-                x = _take(x, sol)
-    return x
-
-
-@njit(cache=True, inline="always")
-def _ray_geom(gtype, s0, s1, s2, lp0, lp1, lp2, lv0, lv1, lv2):  # pragma: no cover - compiled
-    """Ray length to a primitive geom in its own frame, -1 if none (MuJoCo's engine_ray.c).
-
-    Args:
-        gtype: mjtGeom of the geom (a primitive).
-        s0: ``geom_size[0]``, metres.
-        s1: ``geom_size[1]``, metres.
-        s2: ``geom_size[2]``, metres.
-        lp0: ray origin x in the geom frame, metres.
-        lp1: ray origin y in the geom frame, metres.
-        lp2: ray origin z in the geom frame, metres.
-        lv0: ray direction x in the geom frame (unit vector).
-        lv1: ray direction y in the geom frame.
-        lv2: ray direction z in the geom frame.
-    """
-    if gtype == _PLANE:
-        if lv2 > -_MINVAL:
-            return -1.0
-        x = -lp2 / lv2
-        if x < 0.0:
-            return -1.0
-        if (s0 <= 0.0 or abs(lp0 + x * lv0) <= s0) and (s1 <= 0.0 or abs(lp1 + x * lv1) <= s1):
-            return x
-        return -1.0
-    if gtype == _BOX:
-        x = _ray_box_face(-1.0, lp0, lv0, s0, lp1, lv1, s1, lp2, lv2, s2)
-        x = _ray_box_face(x, lp1, lv1, s1, lp0, lv0, s0, lp2, lv2, s2)
-        return _ray_box_face(x, lp2, lv2, s2, lp0, lv0, s0, lp1, lv1, s1)
-    if gtype == _SPHERE:
-        b = lv0 * lp0 + lv1 * lp1 + lv2 * lp2
-        c = lp0 * lp0 + lp1 * lp1 + lp2 * lp2 - s0 * s0
-        return _first_root(lv0 * lv0 + lv1 * lv1 + lv2 * lv2, b, c)
-    if gtype == _ELLIPSOID:
-        i0 = 1.0 / (s0 * s0)
-        i1 = 1.0 / (s1 * s1)
-        i2 = 1.0 / (s2 * s2)
-        a = i0 * lv0 * lv0 + i1 * lv1 * lv1 + i2 * lv2 * lv2
-        b = i0 * lv0 * lp0 + i1 * lv1 * lp1 + i2 * lv2 * lp2
-        c = i0 * lp0 * lp0 + i1 * lp1 * lp1 + i2 * lp2 * lp2 - 1.0
-        return _first_root(a, b, c)
-    if gtype == _CYLINDER:
-        x = -1.0
-        if abs(lv2) > _MINVAL:
-            for side in (-1.0, 1.0):
-                sol = (side * s1 - lp2) / lv2
-                if sol >= 0.0:
-                    p0 = lp0 + sol * lv0
-                    p1 = lp1 + sol * lv1
-                    if p0 * p0 + p1 * p1 <= s0 * s0:
-                        x = _take(x, sol)
-        a = lv0 * lv0 + lv1 * lv1
-        b = lv0 * lp0 + lv1 * lp1
-        c = lp0 * lp0 + lp1 * lp1 - s0 * s0
-        sol = _first_root(a, b, c)
-        if sol >= 0.0 and abs(lp2 + sol * lv2) <= s1:
-            x = _take(x, sol)
-        return x
-    if gtype == _CAPSULE:
-        x = -1.0
-        a = lv0 * lv0 + lv1 * lv1
-        b = lv0 * lp0 + lv1 * lp1
-        c = lp0 * lp0 + lp1 * lp1 - s0 * s0
-        sol = _first_root(a, b, c)
-        if sol >= 0.0 and abs(lp2 + sol * lv2) <= s1:
-            x = _take(x, sol)
-        a = lv0 * lv0 + lv1 * lv1 + lv2 * lv2
-        for side in (-1.0, 1.0):
-            dz = lp2 - side * s1
-            b = lv0 * lp0 + lv1 * lp1 + lv2 * dz
-            c = lp0 * lp0 + lp1 * lp1 + dz * dz - s0 * s0
-            x0, x1 = _quad_roots(a, b, c)
-            # each cap's hemisphere only (MuJoCo accepts z >= s1 at the top, z <= -s1 below)
-            if x0 >= 0.0 and side * (lp2 + x0 * lv2) >= s1:
-                x = _take(x, x0)
-            if x1 >= 0.0 and side * (lp2 + x1 * lv2) >= s1:
-                x = _take(x, x1)
-        return x
-    return -1.0
-
-
-@njit(cache=True, inline="always")
-def _bound_radius(gtype, s0, s1, s2):  # pragma: no cover - compiled
-    """Radius of a sphere about the geom's centre that holds it, metres (inf for planes)."""
-    if gtype == _PLANE:
-        return math.inf
-    if gtype == _SPHERE:
-        return s0
-    if gtype == _CAPSULE:
-        return s0 + s1
-    if gtype == _CYLINDER:
-        return math.sqrt(s0 * s0 + s1 * s1)
-    if gtype == _ELLIPSOID:
-        return max(s0, max(s1, s2))
-    return math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-
-
-# Columns of the geom table: type, bounding radius, size, sensor minus geom position e, mat, the
-# ray origin in the geom frame (mat^T e) and the bounding-sphere term e·e - rb² (both the same
-# for every ray of a sensor, so computed once per sensor and geom).
-_T_TYPE, _T_RB, _T_SIZE, _T_E, _T_MAT, _T_LP, _T_C, _T_LEN = 0, 1, 2, 5, 8, 17, 20, 21
-
-
-@njit(cache=True, error_model="numpy")
-def _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, x, dist, geomid):  # pragma: no cover - compiled
-    """Take the hits of sensor ``s``'s rays on plane geom ``g`` where they are the nearest yet.
-
-    The plane branch of :func:`_ray_geom` for every ray of one sensor, written without early
-    returns and with NumPy's error model (no zero-divisor check), so that LLVM vectorises it.
-
-    Args:
-        vec: (S, 3, n) float64, unit rays in the world frame, a row per axis.
-        s: sensor index.
-        g: geom id.
-        s0: ``geom_size[g, 0]``, metres (half size along x; <= 0 is infinite).
-        s1: ``geom_size[g, 1]``, metres (half size along y; <= 0 is infinite).
-        lp0: sensor position x in the geom frame, metres.
-        lp1: sensor position y in the geom frame, metres.
-        lp2: sensor position z in the geom frame, metres.
-        x: (9,) float64, the geom's orientation (``geom_xmat[g]``).
-        dist: (S, n) float64, metres, ray lengths to the nearest hit so far (-1: none); updated.
-        geomid: (S, n) int32, geom of that hit (-1: none); updated.
-    """
-    x0, x1, x2, x3, x4, x5, x6, x7, x8 = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]
-    for k in range(vec.shape[2]):
-        vx = vec[s, 0, k]
-        vy = vec[s, 1, k]
-        vz = vec[s, 2, k]
-        lv0 = x0 * vx + x3 * vy + x6 * vz
-        lv1 = x1 * vx + x4 * vy + x7 * vz
-        lv2 = x2 * vx + x5 * vy + x8 * vz
-        t = -lp2 / lv2
-        best = dist[s, k]
-        if (
-            not (lv2 > -_MINVAL)
-            and t >= 0.0
-            and (s0 <= 0.0 or abs(lp0 + t * lv0) <= s0)
-            and (s1 <= 0.0 or abs(lp1 + t * lv1) <= s1)
-            and (best < 0.0 or t < best)
-        ):
-            dist[s, k] = t
-            geomid[s, k] = g
-
-
-@njit(cache=True, nogil=True)
-def _cast_primitives(
-    dirs_t,
-    cone_cos,
-    site_xpos,
-    site_xmat,
-    site_ids,
-    cand,
-    geom_type,
-    geom_size,
-    geom_rgba,
-    geom_matid,
-    mat_rgba,
-    geom_xpos,
-    geom_xmat,
-    max_range,
-    table,
-    table_id,
-    vec,
-    dist,
-    geomid,
-):  # pragma: no cover - compiled
-    """Cast every sensor's rays against the primitive geoms ``cand`` (the numba backend).
-
-    Follows ``mj_multiRay`` with ``flg_static=1``, ``bodyexclude=-1``: geoms whose geom (or
-    material) alpha is 0 are skipped; the geom-group mask is already applied in ``cand``.
-    Geoms whose bounding sphere lies beyond ``max_range`` or outside the sensor's view cone are
-    culled once per sensor; each remaining non-plane geom gets a bounding-sphere test per ray.
-    Geoms are the outer loop and rays the inner one (each ray still meets the geoms in the
-    same order, so ties go the same way): a plane is then one vectorised pass
-    (:func:`_cast_plane`).
-
-    Args:
-        dirs_t: (3, n) float64, unit rays in the site frame, a row per axis.
-        cone_cos: cosine of the half-angle of the cone around +x that holds all rays.
-        site_xpos: (nsite, 3) float64, ``data.site_xpos``.
-        site_xmat: (nsite, 9) float64, ``data.site_xmat``.
-        site_ids: (S,) int64, the sensors' site ids.
-        cand: (G,) int64, ids of the ray-visible geoms (all primitives).
-        geom_type: (ngeom,) int32, ``model.geom_type``.
-        geom_size: (ngeom, 3) float64, ``model.geom_size``.
-        geom_rgba: (ngeom, 4) float32, ``model.geom_rgba``.
-        geom_matid: (ngeom,) int32, ``model.geom_matid``.
-        mat_rgba: (nmat, 4) float32, ``model.mat_rgba``.
-        geom_xpos: (ngeom, 3) float64, ``data.geom_xpos``.
-        geom_xmat: (ngeom, 9) float64, ``data.geom_xmat``.
-        max_range: metres, cull distance.
-        table: (G, 21) float64, scratch: the kept geoms' columns ``_T_*``.
-        table_id: (G,) int32, scratch: their ids.
-        vec: (S, 3, n) float64, written: the rays in the world frame (:func:`_rotate_rays`).
-        dist: (S, n) float64, metres, written: ray length to the nearest hit, -1 if none.
-        geomid: (S, n) int32, written: geom hit, -1 if none.
-    """
-    cone_sin = math.sqrt(max(0.0, 1.0 - cone_cos * cone_cos))
-    _rotate_rays(dirs_t, site_xmat, site_ids, vec)
-    for s in range(site_ids.shape[0]):
-        i = site_ids[s]
-        o0, o1, o2 = site_xpos[i, 0], site_xpos[i, 1], site_xpos[i, 2]
-        r0, r3, r6 = site_xmat[i, 0], site_xmat[i, 3], site_xmat[i, 6]
-        na = 0
-        for gi in range(cand.shape[0]):
-            g = cand[gi]
-            m = geom_matid[g]
-            if (m < 0 and geom_rgba[g, 3] == 0.0) or (m >= 0 and mat_rgba[m, 3] == 0.0):
-                continue
-            gt = geom_type[g]
-            rb = _bound_radius(gt, geom_size[g, 0], geom_size[g, 1], geom_size[g, 2])
-            if gt != _PLANE:
-                c0 = geom_xpos[g, 0] - o0
-                c1 = geom_xpos[g, 1] - o1
-                c2 = geom_xpos[g, 2] - o2
-                dc = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-                if dc - rb > max_range:
-                    continue
-                if dc > rb:
-                    # distance of the centre from the view cone, dc·sin(θ − α), against rb
-                    along = r0 * c0 + r3 * c1 + r6 * c2
-                    off = math.sqrt(max(0.0, dc * dc - along * along))
-                    if off * cone_cos - along * cone_sin > rb:
-                        continue
-            table[na, _T_TYPE] = gt
-            table[na, _T_RB] = rb
-            for j in range(3):
-                table[na, _T_SIZE + j] = geom_size[g, j]
-            e0 = o0 - geom_xpos[g, 0]
-            e1 = o1 - geom_xpos[g, 1]
-            e2 = o2 - geom_xpos[g, 2]
-            table[na, _T_E] = e0
-            table[na, _T_E + 1] = e1
-            table[na, _T_E + 2] = e2
-            for j in range(9):
-                table[na, _T_MAT + j] = geom_xmat[g, j]
-            x = geom_xmat[g]
-            table[na, _T_LP] = x[0] * e0 + x[3] * e1 + x[6] * e2
-            table[na, _T_LP + 1] = x[1] * e0 + x[4] * e1 + x[7] * e2
-            table[na, _T_LP + 2] = x[2] * e0 + x[5] * e1 + x[8] * e2
-            table[na, _T_C] = e0 * e0 + e1 * e1 + e2 * e2 - rb * rb
-            table_id[na] = g
-            na += 1
-        for k in range(dirs_t.shape[1]):
-            dist[s, k] = -1.0
-            geomid[s, k] = -1
-        for a in range(na):
-            gt = int(table[a, _T_TYPE])
-            g = table_id[a]
-            s0, s1, s2 = table[a, _T_SIZE], table[a, _T_SIZE + 1], table[a, _T_SIZE + 2]
-            e0, e1, e2 = table[a, _T_E], table[a, _T_E + 1], table[a, _T_E + 2]
-            lp0, lp1, lp2 = table[a, _T_LP], table[a, _T_LP + 1], table[a, _T_LP + 2]
-            if gt == _PLANE:
-                _cast_plane(vec, s, g, s0, s1, lp0, lp1, lp2, table[a, _T_MAT:_T_LP], dist, geomid)
-                continue
-            c = table[a, _T_C]
-            x0, x1, x2 = table[a, _T_MAT], table[a, _T_MAT + 1], table[a, _T_MAT + 2]
-            x3, x4, x5 = table[a, _T_MAT + 3], table[a, _T_MAT + 4], table[a, _T_MAT + 5]
-            x6, x7, x8 = table[a, _T_MAT + 6], table[a, _T_MAT + 7], table[a, _T_MAT + 8]
-            for k in range(dirs_t.shape[1]):
-                vx = vec[s, 0, k]
-                vy = vec[s, 1, k]
-                vz = vec[s, 2, k]
-                best = dist[s, k]
-                b = vx * e0 + vy * e1 + vz * e2
-                if c > 0.0:
-                    disc = b * b - c
-                    if b > 0.0 or disc < 0.0:
-                        continue  # misses the bounding sphere, or it lies behind
-                    if best >= 0.0 and -b - math.sqrt(disc) > best:
-                        continue  # bounding sphere wholly beyond the nearest hit so far
-                t = _ray_geom(
-                    gt, s0, s1, s2, lp0, lp1, lp2,
-                    x0 * vx + x3 * vy + x6 * vz,
-                    x1 * vx + x4 * vy + x7 * vz,
-                    x2 * vx + x5 * vy + x8 * vz,
-                )  # fmt: skip
-                if t >= 0.0 and (best < 0.0 or t < best):
-                    dist[s, k] = t
-                    geomid[s, k] = g

@@ -360,6 +360,51 @@ def test_numba_backend_agrees_with_mj_multiray():
     np.testing.assert_allclose(fast.points, ref.points, atol=1e-6)
 
 
+def near_boxes(seed: int):
+    """Boxes and other primitives close round the sensors, a scene for the pixel-span culling."""
+
+    def add(world):
+        rng = np.random.default_rng(seed)
+        kinds = [G.mjGEOM_BOX] * 4 + [G.mjGEOM_SPHERE, G.mjGEOM_CAPSULE, G.mjGEOM_CYLINDER]
+        for i in range(12):
+            kind = kinds[i % len(kinds)]
+            size = [rng.uniform(0.01, 0.3), rng.uniform(0.01, 0.3), rng.uniform(0.01, 0.3)]
+            # from behind the sensors (x < 0.2) to 1.5 m ahead, some round the sensors themselves
+            pos = [rng.uniform(-0.1, 1.5), rng.uniform(-1.2, 1.2), rng.uniform(0.0, 0.5)]
+            quat = rng.normal(size=4)
+            world.add_geom(type=kind, size=size, pos=pos, quat=quat / np.linalg.norm(quat), group=1)
+
+    return add
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_numba_pixel_spans_lose_no_hit(seed):
+    """Boxes cast only on the pixels their corners' images span: mj_multiRay sees the same."""
+    model, data = build(add_world=near_boxes(seed))
+    params = ToFParams.at_scale(0.5)
+    ref = ToFArray(model, params).sense(data)
+    fast = ToFArray(model, dataclasses.replace(params, backend="numba")).sense(data)
+    assert len(np.unique(ref.geom)) >= 4
+    np.testing.assert_array_equal(fast.valid, ref.valid)
+    np.testing.assert_array_equal(fast.geom, ref.geom)
+    np.testing.assert_allclose(fast.depth, ref.depth, atol=1e-6)
+
+
+def test_numba_frame_does_not_depend_on_the_tile_size(monkeypatch):
+    """The numba backend casts in tiles of image rows; one row a tile gives the same bits."""
+    from neurocog_gym.robot import _tof_kernels
+
+    model, data = build(add_world=near_boxes(1))
+    params = ToFParams.at_scale(0.5, backend="numba", noise_std_rel=0.02, dropout=0.05)
+    default = ToFArray(model, params, seed=5).sense(data)
+    monkeypatch.setattr(_tof_kernels, "TILE_RAYS", 1)
+    single = ToFArray(model, params, seed=5)
+    assert single._tile_dist.shape[0] == params.width
+    by_row = single.sense(data)
+    for name in ("points", "depth", "valid", "geom", "origins", "counts"):
+        np.testing.assert_array_equal(getattr(by_row, name), getattr(default, name))
+
+
 def test_numba_backend_refuses_meshes():
     spec = mujoco.MjSpec()
     spec.add_mesh(name="tet", uservert=[0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1])
