@@ -583,6 +583,8 @@ def _centroid(nodes, edges):
 def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
     """Affordance detection on a graph, §4.2: triangulate, Eq. (1)–(2), segment, Eq. (3)–(4).
 
+    :func:`_detect` without the floor level.
+
     Args:
         nodes: (n, 3) float64, metres, world frame, z up.
         edges: (m, 2) int64.
@@ -600,6 +602,21 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
         int64 facets, (F, 3) float64 unit normals, (F,) int64 labels, (K, N_LABEL_COLS) float64
         label table (``L_*`` columns), (K, 3) positions, (K, 3) unit normals, (K, 2, 3) boxes,
         (S, 2, 3) float64 padded boxes of the suspected objects.
+    """
+    out = _detect(nodes, edges, origin, fx, fy, ground_z, mode, prm, False)
+    return out[:11]
+
+
+@njit(cache=True)
+def _detect(nodes, edges, origin, fx, fy, ground_z, mode, prm, floor):
+    """:func:`detect_kernel`, and with ``floor`` the floor level of :func:`floor_level` too.
+
+    The floor level (the median height of the terrain facets' distinct nodes, or the ground
+    level without a terrain facet) is collected on the labelling pass instead of in a pass of
+    its own ("map" mode's ``map_floor_plane``): the same nodes, so the same median.
+
+    Returns:
+        :func:`detect_kernel`'s tuple and the floor level (the ground level without ``floor``).
     """
     n = nodes.shape[0]
     away = (mode & MODE_ORIENT_AWAY) != 0
@@ -766,6 +783,9 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
     lnormal = np.zeros((nreg1, 3))
     lbox = np.empty((nreg1, 2, 3))
     stamp = np.full(n, -1, np.int64)
+    tseen = np.zeros(n if floor else 0, np.bool_)
+    zs = np.empty(n + 1 if floor else 0)
+    nz = 0
     nlab = 0
     nsus = 0
     for s in range(nf):
@@ -776,6 +796,7 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
         flabels[s] = k
         gk = group[s]
         wk = wall_of[s]
+        terrain = floor and gk == KIND_TERRAIN
         stack[0] = s
         sp = 1
         count = 0
@@ -816,6 +837,14 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
             py += ff[i, 4]
             pz += ff[i, 5]
             area += ff[i, 6]
+            if terrain:
+                # Each terrain node's height once over all terrain labels (written, then
+                # counted if new, as in floor_level).
+                for c in range(3):
+                    v = fi[i, c]
+                    zs[nz] = nodes[v, 2]
+                    nz += not tseen[v]
+                    tseen[v] = True
             for c in range(3):
                 v = fi[i, c]
                 if stamp[v] == k:
@@ -903,6 +932,7 @@ def detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm):
         lnormal[:nlab],
         lbox[:nlab],
         sboxes,
+        np.median(zs[:nz]) if nz > 0 else ground,
     )
 
 
@@ -1803,6 +1833,17 @@ def _root(root, a):
 def map_step_kernel(
     nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box, prm, mq
 ):
+    """:func:`_map_step`, the floor level computed by :func:`floor_level`."""
+    return _map_step(
+        nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box, prm, mq,
+        floor_level(nodes, facets, flabels, lab, ground) if mq[Q_FLOOR_PLANE] != 0.0 else ground,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _map_step(
+    nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box, prm, mq, floor
+):
     """The map-mode object steps on ``detect_kernel``'s labels, in one compiled call.
 
     ``AttentionPipeline`` reads an object's measures from the map alone ("map" mode): with
@@ -1835,6 +1876,7 @@ def map_step_kernel(
         box: (K, 2, 3) float64, their boxes.
         prm: (N_PARAMS,) float64, the detection's packed parameters (``P_*``).
         mq: (N_MAP_PARAMS,) float64, the map-mode parameters (``Q_*``).
+        floor: metres, the floor level (:func:`floor_level`), read with ``Q_FLOOR_PLANE``.
 
     Returns:
         ``(lab, pos, normal, box, flabels, merged, sboxes, ground)``: the new label table (K',
@@ -1846,7 +1888,7 @@ def map_step_kernel(
     nl = lab.shape[0]
     tol = prm[P_GROUND_TOL]
     if mq[Q_FLOOR_PLANE] != 0.0:
-        ground = floor_level(nodes, facets, flabels, lab, ground)
+        ground = floor
     objs = np.empty(nl, np.int64)
     nobj = 0
     for k in range(nl):
@@ -2061,8 +2103,8 @@ def detect_map_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm, mq):
         merged)``: as :func:`detect_kernel`'s, after the map step (``merged``: the labels whose
         normals come unnormalised, see :func:`map_step_kernel`; empty without the step).
     """
-    n_bad, truncated, ground, facets, normals, flabels, lab, pos, normal, box, sboxes = (
-        detect_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm)
+    n_bad, truncated, ground, facets, normals, flabels, lab, pos, normal, box, sboxes, floor = (
+        _detect(nodes, edges, origin, fx, fy, ground_z, mode, prm, mq[Q_FLOOR_PLANE] != 0.0)
     )
     merged = np.zeros(0, np.int64)
     if (
@@ -2071,7 +2113,8 @@ def detect_map_kernel(nodes, edges, origin, fx, fy, ground_z, mode, prm, mq):
         and (mode & MODE_ORIENT_AWAY) == 0
         and np.isfinite(ground)
     ):
-        lab, pos, normal, box, flabels, merged, sboxes, ground = map_step_kernel(
-            nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box, prm, mq
-        )
+        lab, pos, normal, box, flabels, merged, sboxes, ground = _map_step(
+            nodes, edges, origin, fx, fy, ground, facets, flabels, lab, pos, normal, box, prm, mq,
+            floor,
+        )  # fmt: skip
     return n_bad, truncated, ground, facets, normals, flabels, lab, pos, normal, box, sboxes, merged

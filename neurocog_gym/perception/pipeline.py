@@ -512,13 +512,16 @@ class AttentionPipeline:
             # The merged normals come unnormalised: normalised as np.linalg.norm does it,
             # sqrt(x . x) (its rounding differs from sqrt(x² + y² + z²) in one case in ten),
             # in the kernel's arrays before the records are made from them.
+            # (The divisions on Python floats round as NumPy's.)
             lab, normal = arrays[2], arrays[4]
             for j in merged.tolist():
                 nsum = normal[j]
                 nn = math.sqrt(float(nsum.dot(nsum)))
                 if nn > 1e-12:
-                    normal[j] = nsum / nn
-                    lab[j, _k.L_GAMMA] = math.acos(min(1.0, max(-1.0, float(normal[j, 2]))))
+                    x, y, z = nsum.tolist()
+                    z /= nn
+                    normal[j] = (x / nn, y / nn, z)
+                    lab[j, _k.L_GAMMA] = math.acos(min(1.0, max(-1.0, z)))
                 else:
                     normal[j] = 0.0
                     lab[j, _k.L_GAMMA] = 0.0
