@@ -1934,12 +1934,14 @@ def _map_step(
                 ):
                     root[_root(root, b)] = _root(root, a)
     gid = np.full(nobj, -1, np.int64)
+    gobj = np.empty(nobj, np.int64)  # each group's first object label (index into objs)
     label_group = np.full(nl, -1, np.int64)
     ng = 0
     for a in range(nobj):
         r = _root(root, a)
         if gid[r] < 0:
             gid[r] = ng
+            gobj[ng] = a
             ng += 1
         label_group[objs[a]] = gid[r]
     fgroup = np.empty(nf, np.int64)
@@ -1947,13 +1949,6 @@ def _map_step(
     for f in range(nf):
         fgroup[f] = label_group[flabels[f]]
         counts[flabels[f]] += 1
-    if ng == nobj and single.shape[0] == nobj:
-        # No label merged: the groups are the labels in order, measured already.
-        res = single
-    else:
-        res = map_objects_kernel(
-            nodes, edges, facets, fgroup, ng, ground, tol, fx, fy, slope, bins, vedge
-        )
     # Each group's members in label order; the group's first label is where it goes.
     first = np.full(ng, -1, np.int64)
     nmem = np.zeros(ng, np.int64)
@@ -1963,6 +1958,32 @@ def _map_step(
             if first[g] < 0:
                 first[g] = k
             nmem[g] += 1
+    if ng == nobj and single.shape[0] == nobj:
+        # No label merged: the groups are the labels in order, measured already.
+        res = single
+    elif single.shape[0] == nobj:
+        # Only the merged groups are measured again: a group of one label is that label,
+        # measured already (map_objects_kernel measures each group on its own facets alone).
+        mid = np.full(ng, -1, np.int64)
+        nmg = 0
+        for g in range(ng):
+            if nmem[g] > 1:
+                mid[g] = nmg
+                nmg += 1
+        fmerged = np.empty(nf, np.int64)
+        for f in range(nf):
+            fmerged[f] = mid[fgroup[f]] if fgroup[f] >= 0 else -1
+        res2 = map_objects_kernel(
+            nodes, edges, facets, fmerged, nmg, ground, tol, fx, fy, slope, bins, vedge
+        )
+        res = np.empty((ng, N_MAP_COLS))
+        for g in range(ng):
+            for c in range(N_MAP_COLS):
+                res[g, c] = res2[mid[g], c] if mid[g] >= 0 else single[gobj[g], c]
+    else:
+        res = map_objects_kernel(
+            nodes, edges, facets, fgroup, ng, ground, tol, fx, fy, slope, bins, vedge
+        )
     nout = nl - nobj + ng
     olab = np.empty((nout, N_LABEL_COLS))
     opos = np.empty((nout, 3))
