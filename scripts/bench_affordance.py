@@ -91,6 +91,34 @@ alone 153-183 µs (its kernel is unchanged). What is left is the detection kerne
 calls, then the map step (about 20 µs) and the objects (about 10 µs). The first call after a
 change of graph runs on cold caches (about 50 µs more at 300 nodes), so the two calls take
 turns at going first.
+
+Notes (2026-12-04, issue 23, second round). The "cold caches" above are the branch
+predictors: `detect_kernel` on one graph called over and over, or on two graphs in turn, ran in
+about 50 µs; on five graphs in turn, 90-110 µs, with or without a 4 MB cache flush between
+calls (which cost 2.5 µs). Data-dependent branches (a short row's end, a triangle test, a
+visited test) are predicted from history, which holds one or two graphs' patterns, not five;
+a real map changes every frame. The map mode is now one compiled call
+(`detect_map_kernel`: detection, floor level collected on the labelling pass, map steps),
+and the triangulation takes fewer such branches: GNG edges (sorted, i < j) skip the
+duplicate scan, the low edges are listed in one flat pass over the edge slots, quads are only
+tried from nodes with two low edges up (75-100 of 300, was 175-235) and triangles only from nodes
+with two forward neighbours, triangle hits and two-facet links are written without a branch;
+`map_objects_kernel` groups its facets by a counting sort, not `argsort`; the records are
+made by `tuple.__new__`. The results are bit for bit the same
+(tests/perception/test_affordance_oracle.py, against the kernels as they were). That call
+and `detect_affordances` share no compiled code any more, so the map-mode call made right
+after `detect_affordances` on the same graph no longer finds the branch history warm: the row
+"first call after a change of graph only" is the honest per-frame figure. Before/after, this
+script (with that row) run on the code of 3d26d7f and of a643ed6 (this page's code) in turn,
+core 0, load average 2.4-3.6 (the other core busy): `AttentionPipeline.detect` median 198.6 /
+185.0 / 182.6 / 188.2 µs -> 133.6 / 130.2 µs (min 124-126 -> 106-108, p10 142-153 -> 115-117);
+first call only 208.3 / 198.0 / 195.3 / 199.5 -> 136.6 / 134.1 µs (p10 163-167 -> 120-121);
+`detect_affordances` 126-134 -> 103-104 µs. Intermediate commits: 160a08e 139.6 / 138.3 µs,
+458838b 133.8 / 144.0 / 136.7 µs (load 2.4-3.5). At this load the median sits at the target,
+a few µs either side from run to run. Tried and dropped (no gain on five graphs in turn,
+slower on one): region growing, labelling and all facet links written with selects instead of
+branches (the stack pointer and the visited flags then form a chain through memory); a
+separate facet-geometry pass for LLVM to vectorise (it did not).
 """
 
 
@@ -181,7 +209,7 @@ def map_table(args: Args) -> list[str]:
         again = g.pipe.detect(g.origin, g.forward)
         assert [o.kind for o in again.objects] == [o.kind for o in g.pipe.last.objects]
     per_graph = max(1, args.map_repeats // len(graphs))
-    t_pipe, t_det = [], []
+    t_pipe, t_det, t_first = [], [], []
     clock = time.perf_counter_ns
     load0 = os.getloadavg()
     t_start = time.perf_counter()
@@ -198,6 +226,7 @@ def map_table(args: Args) -> list[str]:
                 t2 = clock()
                 t_pipe.append(t1 - t0)
                 t_det.append(t2 - t1)
+                t_first.append(t1 - t0)
             else:
                 t0 = clock()
                 detect_affordances(nodes, edges, g.origin, ap, forward=g.forward)
@@ -219,6 +248,7 @@ def map_table(args: Args) -> list[str]:
     rows = [head, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for name, ts in (
         ("`AttentionPipeline.detect` (map mode, per frame)", t_pipe),
+        ("`AttentionPipeline.detect`, the first call after a change of graph only", t_first),
         ("`detect_affordances` alone", t_det),
     ):
         rows.append(

@@ -458,8 +458,9 @@ class AttentionPipeline:
     def _detect_map(self, sensor_origin, forward, ground_z) -> Affordances:
         """Detection and the map-mode object steps ("map" mode, §4.2.1; module docstring).
 
-        The steps on the graph's nodes and facets, nothing from the raw points, in one
-        compiled call after the detection's (``_affordance_kernels.map_step_kernel``):
+        The steps on the graph's nodes and facets, nothing from the raw points, compiled
+        into one call with the detection (``_affordance_kernels.detect_map_kernel``: the
+        detection, then ``map_step_kernel``'s steps):
 
         * *floor plane* (``map_floor_plane``, unless ``ground_z`` is given): the ground level
           is the median height of the terrain facets' nodes; A_h and the high-node test are
