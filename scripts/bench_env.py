@@ -37,6 +37,7 @@ import os
 import subprocess
 import sys
 import time
+import types
 from pathlib import Path
 
 import gymnasium as gym
@@ -115,6 +116,19 @@ def _uptime() -> str:
         return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     except OSError:
         return f"load average: {load_average()}"
+
+
+def _affinity() -> str:
+    """A sentence on the CPUs this process may run on, if fewer than the machine's."""
+    if not hasattr(os, "sched_getaffinity"):
+        return ""
+    cpus = sorted(os.sched_getaffinity(0))
+    if len(cpus) >= (os.cpu_count() or 1):
+        return ""
+    return (
+        f" Pinned (`taskset`) to CPU {', '.join(map(str, cpus))}: every row and the vector rows' "
+        "worker processes share it, so the vector rows measure no parallel speed-up."
+    )
 
 
 # -- part env ------------------------------------------------------------------------------------
@@ -210,7 +224,7 @@ def part_env(args: Args) -> tuple[list[str], float]:
     lines = [
         "## Env throughput (`scripts/bench_env.py`)",
         "",
-        f"Machine: {machine('mujoco', 'gymnasium', 'stable_baselines3', 'torch')}.",
+        f"Machine: {machine('mujoco', 'gymnasium', 'stable_baselines3', 'torch')}.{_affinity()}",
         f"Load average before / after: {load0} / {load1}  ",
         f"`uptime` before: `{up0}`  ",
         f"`uptime` after: `{up1}`",
@@ -508,11 +522,20 @@ def part_vec(args: Args, one_env: float) -> list[str]:
 # -- profile ---------------------------------------------------------------------------------------
 
 
+RAW_POINT_KERNELS = {
+    "view_edge_kernel": "  of which raw points cut by the top of the view (view_edge_kernel)",
+    "refine_objects_kernel": "  of which raw-point object extents (refine_objects_kernel)",
+}
+"""Kernels of the attention pipeline's raw-point steps (perception/_affordance_kernels.py) that
+the profile times: each scans the frame's points, on every control cycle an object is in view."""
+
+
 def _section_profile(tof, steps: int) -> tuple[float, dict[str, float]]:
     """ms per env step spent in each stage of ``ObstacleEnv.step`` (wall-clock wrappers)."""
     import mujoco
 
     import neurocog_gym.envs.base as base
+    import neurocog_gym.perception._affordance_kernels as affordance_kernels
 
     env = gym.make(SUDDEN, max_episode_steps=-1, **({"tof": tof} if tof is not None else {}))
     u = env.unwrapped
@@ -542,11 +565,22 @@ def _section_profile(tof, steps: int) -> tuple[float, dict[str, float]]:
             )
 
     original = base.mujoco
+    originals = types.SimpleNamespace(
+        **{
+            n: getattr(affordance_kernels, n)
+            for n in RAW_POINT_KERNELS
+            if hasattr(affordance_kernels, n)
+        }
+    )
     base.mujoco = _Mj()
     try:
         wrap(u.tof, "maybe_sense", "ToF sensing (robot/tof.py)")
         wrap(u.pipeline, "step", "attention pipeline step (perception/pipeline.py)")
         wrap(u.pipeline.net, "update", "  of which DD-GNG learning cycle (net.update)")
+        # The raw-point steps scan the whole frame (154,112 points at full resolution).
+        for name, label in RAW_POINT_KERNELS.items():
+            if hasattr(affordance_kernels, name):
+                wrap(affordance_kernels, name, label)
         wrap(u.effectivity, "step", "effectivity (locomotion/effectivity.py)")
         wrap(u, "_check_blocks", "outcome: contacts, stand, knock, step-over (envs/obstacle.py)")
         wrap(u, "_get_obs", "observation (envs/obstacle.py _get_obs)")
@@ -565,6 +599,9 @@ def _section_profile(tof, steps: int) -> tuple[float, dict[str, float]]:
         total = time.perf_counter() - t0
     finally:
         base.mujoco = original
+        for name in RAW_POINT_KERNELS:
+            if hasattr(originals, name):
+                setattr(affordance_kernels, name, getattr(originals, name))
         env.close()
     return 1e3 * total / steps, {k: 1e3 * v / steps for k, v in acc.items()}
 
@@ -580,11 +617,18 @@ def part_profile(args: Args) -> list[str]:
     parent = {
         "  of which DD-GNG learning cycle (net.update)": "attention pipeline step "
         "(perception/pipeline.py)",
+        **{
+            label: "attention pipeline step (perception/pipeline.py)"
+            for label in RAW_POINT_KERNELS.values()
+        },  # fmt: skip
         "  of which proprioception (envs/base.py)": "observation (envs/obstacle.py _get_obs)",
     }
     keys = []
-    for k in sorted((k for k in default if k not in parent), key=lambda k: -default[k]):
-        keys += [k] + sorted((c for c in default if parent.get(c) == k), key=lambda c: -default[c])
+    names = list(default) + [k for k in full if k not in default]
+    for k in sorted((k for k in names if k not in parent), key=lambda k: -default.get(k, 0.0)):
+        keys += [k] + sorted(
+            (c for c in names if parent.get(c) == k), key=lambda c: -default.get(c, 0.0)
+        )
     lines = [
         "### Where an obstacle-env step goes",
         "",
@@ -597,7 +641,7 @@ def part_profile(args: Args) -> list[str]:
     ]
     for k in keys:
         lines.append(
-            f"| {k} | {default[k]:.3f} | {100 * default[k] / default_ms:.0f} % "
+            f"| {k} | {default.get(k, 0.0):.3f} | {100 * default.get(k, 0.0) / default_ms:.0f} % "
             f"| {full.get(k, 0.0):.3f} | {100 * full.get(k, 0.0) / full_ms:.0f} % |"
         )
     lines += [f"| **whole step** | {default_ms:.3f} | 100 % | {full_ms:.3f} | 100 % |", ""]
@@ -670,7 +714,7 @@ def part_ppo(args: Args) -> list[str]:
     lines = [
         "## PPO (stable-baselines3) on the obstacle task (`scripts/train_ppo.py`)",
         "",
-        f"Machine: {machine('mujoco', 'gymnasium', 'stable_baselines3', 'torch')}.",
+        f"Machine: {machine('mujoco', 'gymnasium', 'stable_baselines3', 'torch')}.{_affinity()}",
         f"Load average before / after: {load0} / {load1}  ",
         f"`uptime` before: `{up0}`  ",
         f"`uptime` after: `{up1}`",
