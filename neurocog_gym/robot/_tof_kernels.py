@@ -160,32 +160,13 @@ def _take(x, sol):  # pragma: no cover - compiled
 
 @njit(cache=True, inline="always")
 def _ray_box_face(x, lpi, lvi, si, lpj, lvj, sj, lpk, lvk, sk):  # pragma: no cover - compiled
-    """Nearer of ``x`` and the hits on the two box faces normal to local axis i.
-
-    MuJoCo's ray_box tries both faces and keeps the nearest hit of all six. Here the face the
-    ray meets first is tried first, and the other only if the first is missed: with the same
-    divisor ``lvi`` and numerators ordered, rounded division keeps the far face's length no
-    smaller than the near face's, so the nearest hit, and hence the result, is MuJoCo's.
-    """
+    """Nearer of ``x`` and the hits on the two box faces normal to local axis i."""
     if abs(lvi) > MINVAL:
-        near = -1.0 if lvi > 0.0 else 1.0
-        sol = (near * si - lpi) / lvi
-        if sol >= 0.0 and abs(lpj + sol * lvj) <= sj and abs(lpk + sol * lvk) <= sk:
-            return _take(x, sol)
-        sol = (-near * si - lpi) / lvi
-        if sol >= 0.0 and abs(lpj + sol * lvj) <= sj and abs(lpk + sol * lvk) <= sk:
-            return _take(x, sol)
+        for side in (-1.0, 1.0):
+            sol = (side * si - lpi) / lvi
+            if sol >= 0.0 and abs(lpj + sol * lvj) <= sj and abs(lpk + sol * lvk) <= sk:
+                x = _take(x, sol)
     return x
-
-
-@njit(cache=True, inline="always")
-def _leaves_slab(lpi, lvi, si):  # pragma: no cover - compiled
-    """Whether a ray starts outside the slab ``|p_i| <= si`` and does not head into it.
-
-    Then ``lpi + t · lvi`` (t >= 0) stays outside in rounded arithmetic too, so no face of the
-    box can take the hit (each needs the other coordinates within the box): a miss.
-    """
-    return (lpi > si and lvi >= 0.0) or (lpi < -si and lvi <= 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -213,9 +194,7 @@ def _ray_geom(gtype, s0, s1, s2, lp0, lp1, lp2, lv0, lv1, lv2):  # pragma: no co
         if (s0 <= 0.0 or abs(lp0 + x * lv0) <= s0) and (s1 <= 0.0 or abs(lp1 + x * lv1) <= s1):
             return x
         return -1.0
-    if gtype == BOX:
-        if _leaves_slab(lp0, lv0, s0) or _leaves_slab(lp1, lv1, s1) or _leaves_slab(lp2, lv2, s2):
-            return -1.0
+    if gtype == BOX:  # cast_frame casts boxes with _cast_box, the same test without branches
         x = _ray_box_face(-1.0, lp0, lv0, s0, lp1, lv1, s1, lp2, lv2, s2)
         x = _ray_box_face(x, lp1, lv1, s1, lp0, lv0, s0, lp2, lv2, s2)
         return _ray_box_face(x, lp2, lv2, s2, lp0, lv0, s0, lp1, lv1, s1)
@@ -662,7 +641,9 @@ def cast_frame(
     material) alpha is 0 are skipped; the geom-group mask is already applied in ``cand``.
     Geoms whose bounding sphere lies beyond ``max_range`` or outside the sensor's view cone are
     culled once per sensor; each remaining non-plane geom is cast only on the pixel rows and
-    columns whose rays can meet its bounding sphere, and gets a bounding-sphere test per ray.
+    columns whose rays can meet its bounding sphere (for a box, also its corners' images:
+    :func:`_box_spans`), and gets a bounding-sphere test per ray; boxes are cast branch-free
+    (:func:`_cast_box`), the other primitives ray by ray (:func:`_ray_geom`).
 
     The image is cast in tiles of whole rows (``ray_buf``'s width): a tile's rays are rotated
     into the world, cast against every kept geom in turn (so each ray meets the geoms in the
