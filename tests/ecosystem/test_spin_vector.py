@@ -16,6 +16,11 @@ from neurocog_gym.envs.vector import SpinVectorEnv, make_spin_vector
 
 SUDDEN = "NeuroCog/SuddenObstacle-v1"
 
+needs_workers = pytest.mark.skipif(
+    len(os.sched_getaffinity(0)) < 2,
+    reason="SpinVectorEnv runs every sub-env in this process on one CPU: no worker to test",
+)
+
 
 class _TinyEnv(gym.Env):
     """A Dict-observation env whose info carries every kind of value Gymnasium batches."""
@@ -270,6 +275,7 @@ def test_bad_arguments_are_clear_errors():
         envs.step(np.zeros((2, 2), np.float32))
 
 
+@needs_workers
 def test_worker_errors_surface_with_the_cause():
     def broken():
         raise OSError("no such model file")
@@ -286,6 +292,7 @@ def test_worker_errors_surface_with_the_cause():
         envs.close()
 
 
+@needs_workers
 def test_a_killed_worker_is_an_error_not_a_hang():
     envs = SpinVectorEnv([_tiny(0), _tiny(1)])
     try:
@@ -394,6 +401,7 @@ def test_other_start_methods(context):
     _assert_same_rollouts(SyncVectorEnv(fns), SpinVectorEnv(fns, context=context), 25, 4, context)
 
 
+@needs_workers
 @pytest.mark.parametrize("context", ["fork", "forkserver"])
 def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
     import subprocess
@@ -431,6 +439,7 @@ def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
         pytest.fail(f"worker {pid} still runs 10 s after its vector env's process died")
 
 
+@needs_workers
 def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
     import subprocess
     import sys
