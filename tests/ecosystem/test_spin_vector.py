@@ -463,10 +463,16 @@ def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
     )
     proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)  # fmt: skip
-    pid = int(proc.stdout.readline())
-    time.sleep(1.0)
-    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
-    out, err = proc.communicate(timeout=60)
+    try:
+        pid = int(proc.stdout.readline())
+        time.sleep(1.0)
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+        out, err = proc.communicate(timeout=60)
+    finally:
+        # A hang must not leave the spinning processes behind for the rest of the suite.
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
     assert "interrupted" in out, err
     assert "Traceback" not in err, err
     assert proc.returncode == 0
