@@ -453,6 +453,10 @@ def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
         "if __name__ == '__main__':\n"
         "    v = SpinVectorEnv([make, make])\n"
         "    v.reset(seed=0)\n"
+        # Steps before the pid, so every kernel is compiled before the Ctrl-C: the test hung in
+        # fresh clones (cold numba cache) and passed once the kernels were cached.
+        "    for _ in range(20):\n"
+        "        v.step(np.zeros((2, 15), np.float32))\n"
         "    print(v._procs[0].pid, flush=True)\n"
         "    try:\n"
         "        while True:\n"
