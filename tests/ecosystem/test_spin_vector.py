@@ -440,12 +440,10 @@ def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
 
 
 @needs_workers
-@pytest.mark.xfail(
-    strict=False,
-    reason="known bug, not found: in a fresh clone's full suite the interrupted script's main "
-    "process and worker keep spinning after the SIGINT (4 of 4 fresh-clone runs on "
-    "2026-12-04); alone, or once numba's cache is written, it passes",
-)
+# Known bug, not found: in a fresh clone's full suite the interrupted script's main process and
+# worker keep spinning after the SIGINT (4 of 4 fresh-clone runs on 2026-12-04); alone, or once
+# numba's cache is written, it passes. Out of `make test` until found; `make test-all` runs it.
+@pytest.mark.slow
 def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
     import subprocess
     import sys
