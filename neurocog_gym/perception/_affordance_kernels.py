@@ -1618,6 +1618,149 @@ M_HBOX = 15  # 15..18: min x, y, max x, y of the group's high nodes
 N_MAP_COLS = 19
 
 
+@njit(cache=True)
+def min_area_rect(pf, pl, k, hull):
+    """The minimum-area rectangle round ``k`` points of the ground plane (rotating calipers).
+
+    The points' convex hull (Andrew's monotone chain), then each hull edge's direction as a
+    rectangle axis (the minimum-area rectangle has a side on a hull edge, Freeman & Shapira
+    1975). A block's footprint is a rectangle at any yaw, and the nodes on it sit inside its
+    edges, rarest at its corners: the rectangle's sides follow the edges, where the nodes
+    are, and its corners stand where the nodes are not.
+
+    Args:
+        pf: (>= k,) float64, metres, the points' coordinates along the walking direction.
+        pl: (>= k,) float64, metres, across it.
+        k: number of points.
+        hull: (>= 3k + 2,) int64 work buffer.
+
+    Returns:
+        ``(a, b, c, s)``: the side along the rectangle's axis, the side across it (metres),
+        and |cos|, |sin| of the angle between that axis and the walking direction; so the
+        rectangle spans ``a c + b s`` along the walking direction and ``a s + b c`` across
+        it. One point, or none: ``(0, 0, 1, 0)``.
+    """
+    if k < 2:
+        return 0.0, 0.0, 1.0, 0.0
+    # Lexicographic order (pf, then pl): sorted on pf, then an insertion pass (linear on the
+    # sorted order) puts equal pf in pl order; in hull[2k + 2:], the hull in hull[:2k + 2].
+    order = hull[2 * k + 2 : 3 * k + 2]
+    order[:] = np.argsort(pf[:k])
+    for q in range(1, k):
+        v = order[q]
+        x = pf[v]
+        y = pl[v]
+        r = q
+        while r > 0:
+            o = order[r - 1]
+            if pf[o] < x or (pf[o] == x and pl[o] <= y):
+                break
+            order[r] = o
+            r -= 1
+        order[r] = v
+    h = 0
+    for q in range(k):  # lower hull
+        i = order[q]
+        while h >= 2:
+            a = hull[h - 2]
+            b = hull[h - 1]
+            cr = (pf[b] - pf[a]) * (pl[i] - pl[a]) - (pl[b] - pl[a]) * (pf[i] - pf[a])
+            if cr > 0.0:
+                break
+            h -= 1
+        hull[h] = i
+        h += 1
+    lo = h + 1
+    for q in range(k - 2, -1, -1):  # upper hull
+        i = order[q]
+        while h >= lo:
+            a = hull[h - 2]
+            b = hull[h - 1]
+            cr = (pf[b] - pf[a]) * (pl[i] - pl[a]) - (pl[b] - pl[a]) * (pf[i] - pf[a])
+            if cr > 0.0:
+                break
+            h -= 1
+        hull[h] = i
+        h += 1
+    h -= 1  # the last vertex is the first again
+    best = np.inf
+    ra = 0.0
+    rb = 0.0
+    rc = 1.0
+    rs = 0.0
+    for e in range(h):  # h >= 2 here
+        i = hull[e]
+        j = hull[(e + 1) % h]
+        ux = pf[j] - pf[i]
+        uy = pl[j] - pl[i]
+        norm = np.sqrt(ux * ux + uy * uy)
+        if not norm > 0.0:
+            continue
+        ux /= norm
+        uy /= norm
+        a0 = np.inf
+        a1 = -np.inf
+        b0 = np.inf
+        b1 = -np.inf
+        for q in range(h):
+            v = hull[q]
+            pa = pf[v] * ux + pl[v] * uy
+            pb = pl[v] * ux - pf[v] * uy
+            a0 = min(a0, pa)
+            a1 = max(a1, pa)
+            b0 = min(b0, pb)
+            b1 = max(b1, pb)
+        area = (a1 - a0) * (b1 - b0)
+        if area < best:
+            best = area
+            ra = a1 - a0
+            rb = b1 - b0
+            rc = abs(ux)
+            rs = abs(uy)
+    return ra, rb, rc, rs
+
+
+@njit(cache=True)
+def group_rect(nodes, facets, fgroup, g, floor, tol, zmin, fx, fy, stamp, pf, pl, hull):
+    """The minimum-area rectangle of a group's high nodes at least ``zmin`` above ``floor``.
+
+    The group's nodes are the distinct vertices of the facets ``f`` with ``fgroup[f] == g``.
+
+    Args:
+        nodes: (n, 3) float64, metres.
+        facets: (F, 3) int64 node indices.
+        fgroup: (F,) int64 group of each facet, or -1.
+        g: the group.
+        floor: metres, the ground level.
+        tol: metres, the ground tolerance: the group's high nodes are higher above ``floor``.
+        zmin: metres above ``floor``: of those, the nodes at least this high are taken.
+        fx: x of the unit walking direction in the ground plane.
+        fy: y of the unit walking direction in the ground plane.
+        stamp: (n,) int64 work buffer; entries equal to ``g`` are overwritten.
+        pf: (n,) float64 work buffer.
+        pl: (n,) float64 work buffer.
+        hull: (3n + 2,) int64 work buffer.
+
+    Returns:
+        :func:`min_area_rect`'s ``(a, b, c, s)``.
+    """
+    k = 0
+    for f in range(facets.shape[0]):
+        if fgroup[f] != g:
+            continue
+        for c in range(3):
+            v = facets[f, c]
+            if stamp[v] == g:
+                continue
+            stamp[v] = g
+            z = nodes[v, 2] - floor
+            if z > tol and z >= zmin:
+                pf[k] = nodes[v, 0] * fx + nodes[v, 1] * fy
+                pl[k] = nodes[v, 1] * fx - nodes[v, 0] * fy
+                k += 1
+    return min_area_rect(pf, pl, k, hull)
+
+
 @njit(cache=True, nogil=True)
 def map_objects_kernel(
     nodes, edges, facets, fgroup, ngroups, ground, tol, fx, fy, slope, bins, edge
@@ -1789,7 +1932,10 @@ Q_MIN_HEIGHT = 4
 Q_HIGH_BOX = 5  # PipelineParams.map_box_from_high
 Q_VIEW_FIRST = 6  # PipelineParams.map_view_first
 Q_FLOOR_PLANE = 7  # PipelineParams.map_floor_plane
-N_MAP_PARAMS = 8
+Q_RECT = 8  # PipelineParams.map_rect
+Q_RECT_CORRECTION = 9  # PipelineParams.map_rect_correction
+Q_RECT_HEIGHT = 10  # PipelineParams.map_rect_height
+N_MAP_PARAMS = 11
 
 
 @njit(cache=True)
@@ -1859,8 +2005,10 @@ def _map_step(
     (union in label order; the group takes its first label's place), except, with
     ``Q_VIEW_FIRST``, a label whose own high nodes reach the graph's view edge (merged with
     none); each group is measured by :func:`map_objects_kernel` (high-node extents plus
-    ``Q_EDGE_CORRECTION`` × their spacing; the box is the high nodes' with ``Q_HIGH_BOX``,
-    else all the group's nodes', grown by half the correction in the ground plane),
+    ``Q_EDGE_CORRECTION`` × their spacing, or with ``Q_RECT`` their minimum-area rectangle,
+    each side grown by ``Q_RECT_CORRECTION`` × their spacing, projected; the box is the high
+    nodes' with ``Q_HIGH_BOX``, else all the group's nodes', grown by half the correction in
+    the ground plane),
     relabelled wall at the top of the graph's own view (``Q_VIEW_CUT``,
     :func:`view_edge_kernel` on the nodes), and suspected below the density threshold. A
     merged group's position is the facet-count-weighted mean of its pieces', its size their
@@ -2001,6 +2149,18 @@ def _map_step(
     new_of = np.full(nl, -1, np.int64)
     out_of_group = np.full(ng, -1, np.int64)
     corr = mq[Q_EDGE_CORRECTION]
+    use_rect = mq[Q_RECT] != 0.0
+    if use_rect:
+        n = nodes.shape[0]
+        rstamp = np.full(n, -1, np.int64)
+        rpf = np.empty(n)
+        rpl = np.empty(n)
+        rhull = np.empty(3 * n + 2, np.int64)
+    else:
+        rstamp = np.empty(0, np.int64)
+        rpf = np.empty(0)
+        rpl = rpf
+        rhull = rstamp
     j = 0
     for k in range(nl):
         g = label_group[k]
@@ -2070,6 +2230,22 @@ def _map_step(
                 olab[j, L_HEIGHT] = res[g, M_HEIGHT]
                 olab[j, L_WIDTH] = (res[g, M_L1] - res[g, M_L0]) + cc
                 olab[j, L_LENGTH] = (res[g, M_F1] - res[g, M_F0]) + cc
+                at_view_edge = (
+                    view_cut >= 0.0
+                    and res[g, M_VIEW] <= view_cut
+                    and res[g, M_HEIGHT] >= mq[Q_MIN_HEIGHT]
+                )
+                if use_rect and res[g, M_NHIGH] >= 3.0 and not at_view_edge:
+                    # The minimum-area rectangle of the upper high nodes, each side grown by
+                    # the correction, projected on the walking direction and across it (an
+                    # object about to be relabelled wall keeps its extents).
+                    ra, rb, rc, rs = group_rect(
+                        nodes, facets, fgroup, g, ground, tol,
+                        mq[Q_RECT_HEIGHT] * res[g, M_HEIGHT], fx, fy, rstamp, rpf, rpl, rhull,
+                    )  # fmt: skip
+                    cr = mq[Q_RECT_CORRECTION] * res[g, M_SPACING]
+                    olab[j, L_WIDTH] = (ra + cr) * rs + (rb + cr) * rc
+                    olab[j, L_LENGTH] = (ra + cr) * rc + (rb + cr) * rs
             sz = olab[j, L_SIZE]
             density = n_nodes / sz if sz > 0 else 0.0
             olab[j, L_NNODES] = n_nodes

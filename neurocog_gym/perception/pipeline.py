@@ -121,6 +121,33 @@ class PipelineParams:
     (the back edge of a block, seen at a grazing angle, holds fewer nodes). Re-checked with
     ``map_view_first``, ``map_box_from_high`` and ``map_floor_plane`` on 100 scenes of
     series 1: all three 4 % with 1.0, 13 % with 1.25, 10 % with 1.5 (kept)."""
+    map_rect: bool = True
+    """"map" mode, boundary handling (§4.2.1's A_w, A_s): width and length are those of the
+    high nodes' minimum-area rectangle (rotating calipers on their convex hull), each side
+    grown by ``map_rect_correction`` × their spacing, projected across and along the walking
+    direction, not the nodes' own extents on those axes. The blocks lie at any yaw; the nodes
+    on one sit inside its edges and are rarest at its corners, which set a yawed block's
+    extents on the walking axes: the extents fell short there, the rectangle's sides follow
+    the edges where the nodes are. With ``map_attend_above`` (issue 23, 100 scenes of
+    ``scripts/bench_affordance_map.py``; docs/perception.md)."""
+    map_rect_correction: float = 0.5
+    """"map" mode, with ``map_rect``: each side of the rectangle grows by this × the high nodes'
+    spacing (a quarter spacing at each edge). Smaller than ``map_edge_correction``: the
+    rectangle's sides already lie on the outermost nodes of each edge, and the nodes on a
+    block's visible side faces stand at its edge, not inside it."""
+    map_rect_height: float = 0.5
+    """"map" mode, with ``map_rect``: the rectangle is taken round the high nodes at least this
+    share of A_h above the floor; the lower high nodes are the bevel nodes a GNG hangs between
+    a block's top edge and the floor, 2–5 cm up and up to 10 cm outside its footprint."""
+    map_attend_above: bool = True
+    """"map" mode, Algorithm 3's A_min/A_max = Ob^(pos) ∓ Ob^(size)/2 in three dimensions:
+    the attention box of an object (the memory, Algorithm 1's "random of P in suspected
+    obstacle" and Algorithm 3's δ) starts at the ground tolerance above the floor plane, the
+    bottom of the object's high part, not ``suspect_padding`` below its lowest node. The
+    box's floor points round a block (its ground-plane box is grown by the edge correction and
+    the padding) held more than half of the attended inputs and drew the δ-weighted
+    insertions onto the floor; above the floor they fall on the block's top and side faces
+    (9–10 → 16–17 nodes on the block after 0.5 s). "points" mode keeps the padded box."""
     map_view_cut: float = 0.02
     """"map" mode: an object whose high nodes reach the upper edge of the view as the graph
     shows it (the largest node elevation in their azimuth bin, within this tan, ≈ 1.1°) is
@@ -211,6 +238,10 @@ class PipelineParams:
             raise ValueError(
                 f"PipelineParams.map_edge_correction must be >= 0, got {self.map_edge_correction}"
             )
+        if not (math.isfinite(self.map_rect_correction) and self.map_rect_correction >= 0):
+            raise ValueError(
+                f"PipelineParams.map_rect_correction must be >= 0, got {self.map_rect_correction}"
+            )
         if not (isinstance(self.map_view_bins, int) and self.map_view_bins >= 1):
             raise ValueError(
                 f"PipelineParams.map_view_bins must be an int >= 1, got {self.map_view_bins!r}"
@@ -228,6 +259,9 @@ class PipelineParams:
         mq[_k.Q_HIGH_BOX] = 1.0 if self.map_box_from_high else 0.0
         mq[_k.Q_VIEW_FIRST] = 1.0 if self.map_view_first else 0.0
         mq[_k.Q_FLOOR_PLANE] = 1.0 if self.map_floor_plane else 0.0
+        mq[_k.Q_RECT] = 1.0 if self.map_rect else 0.0
+        mq[_k.Q_RECT_CORRECTION] = self.map_rect_correction
+        mq[_k.Q_RECT_HEIGHT] = self.map_rect_height
         mq.flags.writeable = False
         return mq
 
@@ -672,6 +706,11 @@ class AttentionPipeline:
             for o in aff.obstacles
             if o.height >= self.params.min_height
         ]
+        if found and self.params.affordance_source == "map" and self.params.map_attend_above:
+            # Algorithm 3's box in 3-D: the object's high part, above the floor (map_attend_above).
+            floor = float(aff.ground_z) + self.affordance_params.ground_tolerance
+            for b in found:
+                b[0, 2] = min(max(b[0, 2], floor), b[1, 2])
         if not found and (not any(t - tm > self.params.hold for tm in self.memory_time.tolist())):
             return  # nothing new and nothing expired (the memory never exceeds max_boxes)
         # Boxes as nested lists of floats: the overlap tests are plain comparisons.

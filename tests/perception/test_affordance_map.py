@@ -197,9 +197,9 @@ def _box_frame(rng):
     return np.concatenate([fl, top, front])
 
 
-def _run(source, monkeypatch=None, cycles=300):
+def _run(source, monkeypatch=None, cycles=300, params=None):
     rng = np.random.default_rng(0)
-    pipe = AttentionPipeline(seed=3, affordance_source=source)
+    pipe = AttentionPipeline(seed=3, affordance_source=source, params=params)
     pts = _box_frame(rng)
     aff = None
     for c in range(cycles):
@@ -219,7 +219,7 @@ def test_map_mode_reads_no_raw_points(monkeypatch):
 
 
 def test_map_mode_sizes_are_the_high_nodes_extents_plus_the_spacing_correction():
-    pipe, aff = _run("map")
+    pipe, aff = _run("map", params=PipelineParams(map_rect=False))
     nodes, edges = pipe.net.nodes, pipe.net.edges
     tol = pipe.affordance_params.ground_tolerance
     c = pipe.params.map_edge_correction
@@ -307,7 +307,7 @@ def _graphs():
 def test_compiled_map_steps_equal_the_numpy_oracle(merge, new_steps):
     params = PipelineParams(
         affordance_source="map", map_merge=merge, map_view_first=new_steps,
-        map_box_from_high=new_steps, map_floor_plane=new_steps,
+        map_box_from_high=new_steps, map_floor_plane=new_steps, map_rect=False,
     )  # fmt: skip
     pipe = AttentionPipeline(affordance_source="map", params=params)
     checked = merged = 0
@@ -510,3 +510,128 @@ def test_bench_affordance_map_runs_end_to_end(tmp_path):
     assert r.returncode == 0, r.stderr
     text = out.read_text()
     assert "| DD-GNG, map |" in text and "| GNG, map |" in text and "Machine:" in text
+
+
+def test_min_area_rect_hand_computed():
+    # A 0.2 × 0.1 m rectangle turned 30° from the walking direction, its four corners and
+    # two points inside: the rectangle itself, a = 0.2, b = 0.1, |cos 30°|, |sin 30°|.
+    c, s = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+    local = np.array(
+        [[0.1, 0.05], [-0.1, 0.05], [-0.1, -0.05], [0.1, -0.05], [0.0, 0.0], [0.05, 0.02]]
+    )
+    pf = 0.6 + local[:, 0] * c - local[:, 1] * s
+    pl = 0.1 + local[:, 0] * s + local[:, 1] * c
+    a, b, rc, rs = _k.min_area_rect(pf, pl, len(pf), np.empty(3 * len(pf) + 2, np.int64))
+    assert (a, b) == (pytest.approx(0.2), pytest.approx(0.1))
+    assert (rc, rs) == (pytest.approx(c), pytest.approx(s))
+    # Its extents on the walking axes: 0.2 cos 30° + 0.1 sin 30° = 0.2232 along,
+    # 0.2 sin 30° + 0.1 cos 30° = 0.1866 across, the same as the corners' own extents.
+    assert a * rc + b * rs == pytest.approx(np.ptp(pf)) == pytest.approx(0.22321, abs=1e-5)
+    assert a * rs + b * rc == pytest.approx(np.ptp(pl)) == pytest.approx(0.18660, abs=1e-5)
+    hull = np.empty(8, np.int64)  # 3k + 2 for k = 2
+    # one point: no rectangle; two: the segment (0.3, 0.4 → 0.5 long, 0 wide, cos 0.6)
+    assert _k.min_area_rect(np.array([0.5]), np.array([0.1]), 1, hull) == (0.0, 0.0, 1.0, 0.0)
+    a, b, rc, rs = _k.min_area_rect(np.array([0.0, 0.3]), np.array([0.0, 0.4]), 2, hull)
+    assert (a, b) == (pytest.approx(0.5), pytest.approx(0.0))
+    assert (rc, rs) == (pytest.approx(0.6), pytest.approx(0.8))
+    # three collinear points and a repeated one: still the segment
+    a, b, _, _ = _k.min_area_rect(
+        np.array([0.0, 0.1, 0.2, 0.2]), np.array([0.0, 0.0, 0.0, 0.0]), 4, np.empty(14, np.int64)
+    )
+    assert (a, b) == (pytest.approx(0.2), pytest.approx(0.0))
+
+
+def test_group_rect_leaves_out_the_low_high_nodes():
+    # The 3 × 3 grid at 6 cm plus a bevel node 2.5 cm up, 5 cm beyond the grid's +x edge,
+    # on a facet with the grid's corner nodes: high (2.5 cm > 2 cm tolerance) but below half
+    # of A_h = 6 cm, so the extents take it (0.75 - 0.60 = 0.15 along) and the rectangle at
+    # half the height does not (the grid's 0.10 × 0.10, axis-aligned).
+    nodes, edges, facets = _top_grid()
+    nodes = np.vstack([nodes, [[0.75, 0.0, 0.025]]])
+    edges = np.vstack([edges, [[6, 10], [7, 10]]])
+    facets = np.vstack([facets, [[6, 10, 7]]])
+    slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
+    fgroup = np.zeros(len(facets), np.int64)
+    r = _k.map_objects_kernel(
+        nodes, edges, facets, fgroup, 1, 0.0, 0.02, 1.0, 0.0, slope, bins, edge
+    )[0]  # fmt: skip
+    assert r[_k.M_NHIGH] == 10 and r[_k.M_F1] - r[_k.M_F0] == pytest.approx(0.15)
+    n = len(nodes)
+
+    def rect(zmin):
+        return _k.group_rect(
+            nodes, facets, fgroup, 0, 0.0, 0.02, zmin, 1.0, 0.0, np.full(n, -1, np.int64),
+            np.empty(n), np.empty(n), np.empty(3 * n + 2, np.int64),
+        )  # fmt: skip
+
+    a, b, c, s = rect(0.5 * 0.06)
+    assert (a, b) == (pytest.approx(0.10), pytest.approx(0.10))
+    assert a * c + b * s == pytest.approx(0.10)
+    # zmin 0: the bevel node is in; the hull (0.6..0.75 along, ±0.05 across, a pentagon)
+    # has its least-area rectangle on the grid's sides: 0.15 × 0.10.
+    a, b, c, s = rect(0.0)
+    assert a * c + b * s == pytest.approx(0.15)
+    assert a * s + b * c == pytest.approx(0.10)
+
+
+def _rect_oracle(xy):
+    """Least-area rectangle by brute force over every pair's direction: (a, b, |cos|, |sin|)."""
+    best = (np.inf, 0.0, 0.0, 1.0, 0.0)
+    for i in range(len(xy)):
+        for j in range(len(xy)):
+            d = xy[j] - xy[i]
+            n = math.hypot(*d)
+            if i == j or n == 0.0:
+                continue
+            u = d / n
+            pa, pb = xy @ u, xy @ np.array([-u[1], u[0]])
+            a, b = np.ptp(pa), np.ptp(pb)
+            if a * b < best[0] - 1e-15:
+                best = (a * b, a, b, abs(u[0]), abs(u[1]))
+    return best[1:]
+
+
+def test_map_mode_sizes_are_the_rectangle_of_the_upper_high_nodes():
+    pipe, aff = _run("map")
+    p = pipe.params
+    assert p.map_rect
+    nodes, edges = pipe.net.nodes, pipe.net.edges
+    tol = pipe.affordance_params.ground_tolerance
+    checked = 0
+    for k, o in enumerate(aff.objects):
+        if o.kind != "object":
+            continue
+        ids = np.unique(aff.facets[aff.facet_labels == k])
+        hi = ids[nodes[ids, 2] > aff.ground_z + tol]
+        if len(hi) < 3:
+            continue
+        both = np.isin(edges[:, 0], hi) & np.isin(edges[:, 1], hi)
+        d = nodes[edges[both, 0], :2] - nodes[edges[both, 1], :2]
+        s = float(np.median(np.hypot(d[:, 0], d[:, 1]))) if both.any() else 0.0
+        up = hi[nodes[hi, 2] - aff.ground_z >= p.map_rect_height * o.height]
+        a, b, c, sn = _rect_oracle(nodes[up, :2])  # forward is +x
+        e = p.map_rect_correction * s
+        assert o.length == pytest.approx((a + e) * c + (b + e) * sn, abs=1e-9)
+        assert o.width == pytest.approx((a + e) * sn + (b + e) * c, abs=1e-9)
+        checked += 1
+    assert checked >= 1
+
+
+def test_map_attend_above_lifts_the_attention_box_to_the_objects_high_part():
+    for attend_above in (True, False):
+        pipe, aff = _run("map", params=PipelineParams(map_attend_above=attend_above))
+        assert len(pipe.memory_boxes)
+        pad = pipe.affordance_params.suspect_padding
+        floor = aff.ground_z + pipe.affordance_params.ground_tolerance
+        lows = {round(float(o.box[0, 2]) - pad, 12) for o in aff.obstacles}
+        for box in pipe.memory_boxes:
+            if attend_above:
+                # the lower face at ground + tolerance (or the box's top if lower still)
+                assert box[0, 2] == pytest.approx(min(floor, box[1, 2]))
+            else:
+                assert box[0, 2] < floor
+        if not attend_above:
+            assert any(round(float(b[0, 2]), 12) in lows for b in pipe.memory_boxes)
+    # "points" mode keeps the padded box whatever the flag
+    pipe, aff = _run("points", params=PipelineParams(map_attend_above=True))
+    assert all(b[0, 2] < aff.ground_z for b in pipe.memory_boxes)

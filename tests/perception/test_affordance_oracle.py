@@ -110,16 +110,21 @@ def test_truncated_triangulation_equals_the_oracle(max_facets):
     assert truncated > 0
 
 
+# The oracle's map step predates the minimum-area rectangle (``map_rect``): it is compared
+# with the extents it has (the rectangle is checked in test_affordance_map.py).
 PIPELINE_PARAMS = [
-    PipelineParams(affordance_source="map"),
-    PipelineParams(affordance_source="map", map_merge=False),
+    PipelineParams(affordance_source="map", map_rect=False),
+    PipelineParams(affordance_source="map", map_merge=False, map_rect=False),
     PipelineParams(
         affordance_source="map",
         map_view_first=False,
         map_box_from_high=False,
         map_floor_plane=False,
+        map_rect=False,
     ),  # fmt: skip
-    PipelineParams(affordance_source="map", map_view_cut=-1.0, map_edge_correction=0.0),
+    PipelineParams(
+        affordance_source="map", map_view_cut=-1.0, map_edge_correction=0.0, map_rect=False
+    ),
 ]
 
 
