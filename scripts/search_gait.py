@@ -113,6 +113,7 @@ def walk_stats(
     perturb: int = 0,
     kinds: str = "h",
     liftoff: bool = False,
+    gait=None,
 ) -> dict:
     """Walk the design's gait; fall, speed, clearances, drift, one-side share, short contacts.
 
@@ -123,9 +124,10 @@ def walk_stats(
     step over (the high step, then hip -1 for 0.08 s, then knee -1 until the foot is down). The
     other swings are the CPG's; the statistics then describe the disturbed walk. ``liftoff``:
     a disturbance starts at the foot's lift-off (sole above 4 mm), not at the CPG's swing
-    onset (a walk's knee lifts the foot before its hip flexor leads).
+    onset (a walk's knee lifts the foot before its hip flexor leads). ``gait``: walk this gait
+    instead of ``build(design)`` (``design`` is then unused).
     """
-    env = WalkEnv(gait=build(design))
+    env = WalkEnv(gait=gait if gait is not None else build(design))
     env.reset(seed=seed)
     r = env.robot
     radius = float(np.ravel(env.model.geom_size[r.foot_geom, 0])[0])

@@ -254,8 +254,9 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         self._before_control(interrupt, provision)
         d = self.data
         target = self.generator.step(
-            provision, interrupt, d.qpos[self._qpos_ix], d.qvel[self._dof_ix], self.touch()
-        )
+            provision, interrupt, d.qpos[self._qpos_ix], d.qvel[self._dof_ix], self.touch(),
+            d.qvel[3:6],  # the free joint's angular velocity, torso frame (the roll reflex)
+        )  # fmt: skip
         ctrl = self.data.ctrl
         ctrl[self.robot.actuator] = target
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)

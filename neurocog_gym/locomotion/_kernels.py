@@ -183,6 +183,32 @@ def motor_neuron_step(
 
 
 @njit(cache=True)
+def vestibular_step(qd_ref, gyro, gain, side, dt):
+    """The roll reflex (our addition, ``Gait.vestibular_gain``): an Eq. (11)-type sensory term.
+
+    Per leg l with side_l (+1 left, -1 right): the torso's roll rate ``gyro[0]`` (rad/s about
+    its forward axis, positive when the right side sinks) makes the sinking side's legs
+    longer and the rising side's shorter, e_l = gain (-side_l) omega_x: the knee's pool
+    accelerates by -e_l (unfolds) and the hip's by +e_l / 2, so the foot keeps its direction
+    from the hip (``motor.leg_coordinates``). A vestibulospinal reflex; the paper's model feeds
+    body posture back into locomotion in its earlier work (§2), Eq. (11) names only touch. It
+    acts on the pools' reference rate at the start of the cycle, before Eq. (8)'s integration
+    (``motor_neuron_step``), as an acceleration held for one cycle.
+
+    Args:
+        qd_ref: (12,) pool reference rates, rad/s; updated in place.
+        gyro: (3,) torso angular velocity in the torso's frame, rad/s.
+        gain: reflex gain, 1/s (rad/s^2 of leg extension per rad/s of roll rate).
+        side: (4,) +1 for a left leg, -1 for a right one (FL, FR, HL, HR).
+        dt: control cycle, s.
+    """
+    for leg in range(side.shape[0]):
+        e = gain * (-side[leg]) * gyro[0]
+        qd_ref[3 * leg + 1] += 0.5 * e * dt
+        qd_ref[3 * leg + 2] -= e * dt
+
+
+@njit(cache=True)
 def servo_targets(q_ref, coupling, joint_lo, joint_hi, target_out):
     """Pool angles to servo targets: q_ref_j + coupling_j q_ref_j+1 within the joint limits."""
     for i in range(q_ref.shape[0]):
@@ -238,7 +264,7 @@ def generator_cycle(
     side, front, hip_joints, abduct_joints, drive, hip_drive, ramp,
     q_ref, qd_ref, theta_int, theta, theta_dot, posture, mu1, mu2, acc_max, vel_max, fl_width,
     fl_c, fv_K, fv_N, Z, k_rest, d_rest, q_lo, q_hi, dt, acc_out, coupling, joint_lo, joint_hi,
-    target_out,
+    target_out, gyro, vest_gain,
 ):  # pragma: no cover - compiled  # fmt: skip
     """One control cycle of the whole generator (``LocomotionGenerator.step``) in one call.
 
@@ -252,7 +278,9 @@ def generator_cycle(
     dt / max(brake_tau, dt) the filters' steps; ``x`` to ``y`` are ``matsuoka_step``'s
     arguments with ``y`` (24,) its output, ``joint_neurons`` to ``hip_drive`` those of
     ``drive_kernel``, and ``q_ref`` to ``target_out`` those of ``motor_neuron_step``
-    (``theta_int`` the interrupt, ``touch`` shared with the CPG).
+    (``theta_int`` the interrupt, ``touch`` shared with the CPG). With ``vest_gain`` non-zero,
+    ``vestibular_step`` (torso rate ``gyro`` (3,)) runs just before the pools; at 0 it is
+    skipped, and the cycle is the one of the gaits without the reflex, bit for bit.
     """
     braking = command[0] < brake_from or provision[0] < brake_from
     before = provision[0]
@@ -268,6 +296,8 @@ def generator_cycle(
     if ramp != 1.0:
         for j in range(drive.shape[0]):
             drive[j] *= ramp
+    if vest_gain != 0.0:
+        vestibular_step(qd_ref, gyro, vest_gain, side, dt)
     motor_neuron_step(
         q_ref, qd_ref, drive, theta_int, theta, theta_dot, touch, posture, mu1, mu2, acc_max,
         vel_max, fl_width, fl_c, fv_K, fv_N, Z, k_rest, d_rest, q_lo, q_hi, dt, acc_out, coupling,

@@ -10,6 +10,8 @@ replacement for ``assets/default_gait.json``. Fields:
 * ``tau_f``: the CPG frequency scale (Table 3's tau_f).
 * ``acc_max``, ``k_rest``, ``d_rest``: the motor-neuron pools' theta_dd_MAX (Eq. 8, "chosen
   through preliminary testing") and restoring stiffness and damping (``motor.py``).
+* ``vestibular_gain``: the roll reflex's gain, 1/s (``_kernels.vestibular_step``; our addition,
+  0 = none, as in the shipped gait). Missing in a file means 0.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ class Gait:
     acc_max: float = 120.0
     k_rest: float = 160.0
     d_rest: float = 12.6
+    vestibular_gain: float = 0.0
     name: str = "gait"
     notes: dict = field(default_factory=dict)
 
@@ -52,6 +55,11 @@ class Gait:
             value = getattr(self, key)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"gait {key} must be a positive number, got {value}")
+        if not (np.isfinite(self.vestibular_gain) and self.vestibular_gain >= 0):
+            raise ValueError(
+                f"gait vestibular_gain must be a number >= 0 (0: no roll reflex), "
+                f"got {self.vestibular_gain}"
+            )
 
     @property
     def genes_array(self) -> np.ndarray:
@@ -102,6 +110,7 @@ class Gait:
                 acc_max=float(raw.get("acc_max", 120.0)),
                 k_rest=float(raw.get("k_rest", 160.0)),
                 d_rest=float(raw.get("d_rest", 12.6)),
+                vestibular_gain=float(raw.get("vestibular_gain", 0.0)),
                 name=str(raw.get("name", path.stem)),
                 notes=dict(raw.get("notes", {})),
             )

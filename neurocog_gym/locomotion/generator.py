@@ -138,6 +138,7 @@ class LocomotionGenerator:
         self.hip_drive = np.zeros(4)
         self.elapsed = 0.0
         self._cycle_key = None
+        self._no_gyro = np.zeros(3)
 
     def reset(self, rng: np.random.Generator | None = None, noise: float = 0.05) -> None:
         """Reset to the standing posture with the CPG started in a trot phase.
@@ -156,7 +157,7 @@ class LocomotionGenerator:
         self.elapsed = 0.0
         self.pools.reset(self.posture)
 
-    def step(self, provision, interrupt, theta, theta_dot, touch) -> np.ndarray:
+    def step(self, provision, interrupt, theta, theta_dot, touch, gyro=None) -> np.ndarray:
         """One control cycle (one compiled call, ``_kernels.generator_cycle``).
 
         Args:
@@ -165,6 +166,8 @@ class LocomotionGenerator:
             theta: (12,) measured joint angles, rad.
             theta_dot: (12,) measured joint rates, rad/s.
             touch: (4,) normalised touch inputs (1 ~ a quarter of the body weight).
+            gyro: (3,) torso angular velocity in the torso's frame, rad/s, for the roll reflex
+                (``Gait.vestibular_gain``); required when the gait's gain is non-zero.
 
         Returns:
             (12,) servo position targets, rad (``pools.target``).
@@ -181,10 +184,19 @@ class LocomotionGenerator:
             self._cycle_key = (p, cpg, pools, cpg.params, pools.params)
             self._cycle_args = self._constant_args()
         first, second, third = self._cycle_args
+        gain = self.gait.vestibular_gain
+        if gyro is None:
+            if gain != 0.0:
+                raise ValueError(
+                    f"gait {self.gait.name!r} has a roll reflex (vestibular_gain {gain}): "
+                    "step() needs the torso's angular velocity, gyro"
+                )
+            gyro = self._no_gyro
         generator_cycle(
             np.asarray(provision, dtype=np.float64), self.provision, *first,
             np.asarray(touch, dtype=np.float64), *second, ramp, pools.q_ref, pools.qd_ref,
             np.asarray(interrupt, dtype=np.float64), theta, theta_dot, *third,
+            np.asarray(gyro, dtype=np.float64), gain,
         )  # fmt: skip
         return pools.target
 

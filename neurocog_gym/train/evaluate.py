@@ -138,6 +138,12 @@ class GaitEvaluator:
 
     def __init__(self, base_gait: Gait | None = None, params: EvalParams | None = None):
         self.base_gait = base_gait if base_gait is not None else default_gait()
+        if self.base_gait.vestibular_gain != 0.0:
+            raise ValueError(
+                f"gait {self.base_gait.name!r} has a roll reflex (vestibular_gain "
+                f"{self.base_gait.vestibular_gain}); the compiled NSGA-II rollout has none yet, "
+                "so its scores would not be the env's: tune with vestibular_gain 0"
+            )
         self.params = p = params or EvalParams()
         self.model = load_model()
         self.data = mujoco.MjData(self.model)
