@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numba.cpython.unsafe.numbers import trailing_zeros
 
 KIND_TERRAIN = 0
 KIND_WALL = 1
@@ -1642,12 +1643,13 @@ def min_area_rect(pf, pl, k, hull):
     """
     if k < 2:
         return 0.0, 0.0, 1.0, 0.0
-    # Lexicographic order (pf, then pl): sorted on pf, then an insertion pass (linear on the
-    # sorted order) puts equal pf in pl order; in hull[2k + 2:], the hull in hull[:2k + 2].
+    # Lexicographic order (pf, then pl) by insertion, in hull[2k + 2:], the hull in
+    # hull[:2k + 2]: a block's 5-40 points, where an argsort's allocation cost more than
+    # the sort. Points equal in both coordinates may come in any order: the hull and the
+    # rectangle read coordinates only.
     order = hull[2 * k + 2 : 3 * k + 2]
-    order[:] = np.argsort(pf[:k])
-    for q in range(1, k):
-        v = order[q]
+    for q in range(k):
+        v = q
         x = pf[v]
         y = pl[v]
         r = q
@@ -1721,43 +1723,33 @@ def min_area_rect(pf, pl, k, hull):
 
 
 @njit(cache=True)
-def group_rect(nodes, facets, fgroup, g, floor, tol, zmin, fx, fy, stamp, pf, pl, hull):
-    """The minimum-area rectangle of a group's high nodes at least ``zmin`` above ``floor``.
-
-    The group's nodes are the distinct vertices of the facets ``f`` with ``fgroup[f] == g``.
+def group_rect(nodes, hnode, h0, h1, floor, zmin, fx, fy, pf, pl, hull):
+    """The minimum-area rectangle of the high nodes ``hnode[h0:h1]`` at least ``zmin`` up.
 
     Args:
         nodes: (n, 3) float64, metres.
-        facets: (F, 3) int64 node indices.
-        fgroup: (F,) int64 group of each facet, or -1.
-        g: the group.
-        floor: metres, the ground level.
-        tol: metres, the ground tolerance: the group's high nodes are higher above ``floor``.
-        zmin: metres above ``floor``: of those, the nodes at least this high are taken.
+        hnode: (H,) int64 node indices: a group's distinct high nodes, as
+            :func:`map_objects_lists` lists them (``hnode[hstart[g]:hstart[g + 1]]``).
+        h0: first entry of the group's high nodes in ``hnode``.
+        h1: one past the last.
+        floor: metres, the ground level the high nodes were found against.
+        zmin: metres above ``floor``: the nodes at least this high are taken.
         fx: x of the unit walking direction in the ground plane.
         fy: y of the unit walking direction in the ground plane.
-        stamp: (n,) int64 work buffer; entries equal to ``g`` are overwritten.
-        pf: (n,) float64 work buffer.
-        pl: (n,) float64 work buffer.
-        hull: (3n + 2,) int64 work buffer.
+        pf: (>= h1 - h0,) float64 work buffer.
+        pl: (>= h1 - h0,) float64 work buffer.
+        hull: (>= 3 (h1 - h0) + 2,) int64 work buffer.
 
     Returns:
         :func:`min_area_rect`'s ``(a, b, c, s)``.
     """
     k = 0
-    for f in range(facets.shape[0]):
-        if fgroup[f] != g:
-            continue
-        for c in range(3):
-            v = facets[f, c]
-            if stamp[v] == g:
-                continue
-            stamp[v] = g
-            z = nodes[v, 2] - floor
-            if z > tol and z >= zmin:
-                pf[k] = nodes[v, 0] * fx + nodes[v, 1] * fy
-                pl[k] = nodes[v, 1] * fx - nodes[v, 0] * fy
-                k += 1
+    for q in range(h0, h1):
+        v = hnode[q]
+        if nodes[v, 2] - floor >= zmin:
+            pf[k] = nodes[v, 0] * fx + nodes[v, 1] * fy
+            pl[k] = nodes[v, 1] * fx - nodes[v, 0] * fy
+            k += 1
     return min_area_rect(pf, pl, k, hull)
 
 
@@ -1794,8 +1786,46 @@ def map_objects_kernel(
         (G, N_MAP_COLS) float64, ``M_*`` columns (NaN extents, inf margin and an empty (inf,
         -inf) high box without a high node).
     """
+    return map_objects_lists(
+        nodes, edges, facets, fgroup, ngroups, ground, tol, fx, fy, slope, bins, edge
+    )[0]
+
+
+@njit(cache=True)
+def _median_sorting(buf, lo, hi):
+    """``np.median(buf[lo:hi])`` (``hi > lo``, no NaN), sorting that slice in place.
+
+    The same value as NumPy's and numba's median (the middle element, or the halved sum of
+    the two middle ones), without the copy numba's ``np.median`` allocates: a group's edges
+    number 1-60.
+    """
+    for q in range(lo + 1, hi):
+        x = buf[q]
+        r = q
+        while r > lo and buf[r - 1] > x:
+            buf[r] = buf[r - 1]
+            r -= 1
+        buf[r] = x
+    k = hi - lo
+    half = lo + (k >> 1)
+    if k & 1 == 0:
+        return (buf[half - 1] + buf[half]) / 2
+    return buf[half]
+
+
+@njit(cache=True, nogil=True)
+def map_objects_lists(
+    nodes, edges, facets, fgroup, ngroups, ground, tol, fx, fy, slope, bins, edge
+):
+    """:func:`map_objects_kernel`'s measures, and each group's distinct high nodes.
+
+    Returns:
+        ``(out, hstart, hnode)``: :func:`map_objects_kernel`'s (G, N_MAP_COLS) table, and
+        group ``g``'s high nodes as ``hnode[hstart[g]:hstart[g + 1]]`` (int64, in the order
+        its facets reach them), for :func:`group_rect`.
+    """
     n = nodes.shape[0]
-    out = np.zeros((ngroups, N_MAP_COLS))
+    out = np.empty((ngroups, N_MAP_COLS))
     stamp = np.full(n, -1, np.int64)
     # The facets grouped by group, in facet order within a group (a counting sort: the order
     # of a stable argsort, without its sort; the facets of no group are left out).
@@ -1813,26 +1843,38 @@ def map_objects_kernel(
         if g >= 0:
             order[gfill[g]] = f
             gfill[g] += 1
-    # Up to 62 groups, one pass over the edges for all of them (each node's groups as bits of
-    # ``member``) instead of one pass per group; the spacings are the same medians.
+    hstart = np.empty(ngroups + 1, np.int64)
+    hnode = np.empty(3 * gstart[ngroups], np.int64)
+    nhn = 0
+    # Up to 62 groups, one pass over the edges for all of them (each high node's groups as
+    # bits of ``hmember``) instead of one pass per group; the spacings are the same medians.
     bits = ngroups <= 62
-    member = np.zeros(n if bits else 0, np.int64)
+    hmember = np.zeros(n if bits else 0, np.int64)
     lens = np.empty(1 if bits else max(edges.shape[0], 1))  # the per-group pass's lengths
     for g in range(ngroups):
-        out[g, M_HEIGHT] = -np.inf
-        out[g, M_F0] = np.inf
-        out[g, M_F1] = -np.inf
-        out[g, M_L0] = np.inf
-        out[g, M_L1] = -np.inf
-        out[g, M_VIEW] = np.inf
-        for d in range(3):
-            out[g, M_BOX + d] = np.inf
-            out[g, M_BOX + 3 + d] = -np.inf
-        for d in range(2):
-            out[g, M_HBOX + d] = np.inf
-            out[g, M_HBOX + 2 + d] = -np.inf
         # The group's facets are contiguous in ``order``; ``stamp`` marks its nodes (a node
-        # on facets of two groups counts in both).
+        # on facets of two groups counts in both). The measures are kept in locals, each
+        # the same min / max / count as a column of ``out`` updated in place.
+        hstart[g] = nhn
+        nn = 0.0
+        nh = 0.0
+        height = -np.inf
+        f0 = np.inf
+        f1 = -np.inf
+        l0 = np.inf
+        l1 = -np.inf
+        view = np.inf
+        bx0 = np.inf
+        by0 = np.inf
+        bz0 = np.inf
+        bx1 = -np.inf
+        by1 = -np.inf
+        bz1 = -np.inf
+        hx0 = np.inf
+        hy0 = np.inf
+        hx1 = -np.inf
+        hy1 = -np.inf
+        bit = np.int64(1) << min(g, 62)
         for q in range(gstart[g], gstart[g + 1]):
             f = order[q]
             for c in range(3):
@@ -1840,31 +1882,61 @@ def map_objects_kernel(
                 if stamp[v] == g:
                     continue
                 stamp[v] = g
-                if bits:
-                    member[v] |= np.int64(1) << g
-                out[g, M_NNODES] += 1.0
+                nn += 1.0
                 x = nodes[v, 0]
                 y = nodes[v, 1]
                 z = nodes[v, 2]
-                for d in range(3):
-                    out[g, M_BOX + d] = min(out[g, M_BOX + d], nodes[v, d])
-                    out[g, M_BOX + 3 + d] = max(out[g, M_BOX + 3 + d], nodes[v, d])
+                bx0 = min(bx0, x)
+                by0 = min(by0, y)
+                bz0 = min(bz0, z)
+                bx1 = max(bx1, x)
+                by1 = max(by1, y)
+                bz1 = max(bz1, z)
                 if z - ground > tol:
-                    out[g, M_NHIGH] += 1.0
-                    out[g, M_HEIGHT] = max(out[g, M_HEIGHT], z - ground)
+                    hnode[nhn] = v
+                    nhn += 1
+                    if bits:
+                        hmember[v] |= bit
+                    nh += 1.0
+                    height = max(height, z - ground)
                     pf = x * fx + y * fy
                     pl = y * fx - x * fy
-                    out[g, M_F0] = min(out[g, M_F0], pf)
-                    out[g, M_F1] = max(out[g, M_F1], pf)
-                    out[g, M_L0] = min(out[g, M_L0], pl)
-                    out[g, M_L1] = max(out[g, M_L1], pl)
-                    out[g, M_HBOX] = min(out[g, M_HBOX], x)
-                    out[g, M_HBOX + 1] = min(out[g, M_HBOX + 1], y)
-                    out[g, M_HBOX + 2] = max(out[g, M_HBOX + 2], x)
-                    out[g, M_HBOX + 3] = max(out[g, M_HBOX + 3], y)
+                    f0 = min(f0, pf)
+                    f1 = max(f1, pf)
+                    l0 = min(l0, pl)
+                    l1 = max(l1, pl)
+                    hx0 = min(hx0, x)
+                    hy0 = min(hy0, y)
+                    hx1 = max(hx1, x)
+                    hy1 = max(hy1, y)
                     b = bins[v]
                     if b >= 0:
-                        out[g, M_VIEW] = min(out[g, M_VIEW], edge[b] - slope[v])
+                        view = min(view, edge[b] - slope[v])
+        if nh == 0.0:
+            height = np.nan
+            f0 = np.nan
+            f1 = np.nan
+            l0 = np.nan
+            l1 = np.nan
+        out[g, M_NNODES] = nn
+        out[g, M_NHIGH] = nh
+        out[g, M_HEIGHT] = height
+        out[g, M_F0] = f0
+        out[g, M_F1] = f1
+        out[g, M_L0] = l0
+        out[g, M_L1] = l1
+        out[g, M_SPACING] = 0.0
+        out[g, M_VIEW] = view
+        out[g, M_BOX] = bx0
+        out[g, M_BOX + 1] = by0
+        out[g, M_BOX + 2] = bz0
+        out[g, M_BOX + 3] = bx1
+        out[g, M_BOX + 4] = by1
+        out[g, M_BOX + 5] = bz1
+        out[g, M_HBOX] = hx0
+        out[g, M_HBOX + 1] = hy0
+        out[g, M_HBOX + 2] = hx1
+        out[g, M_HBOX + 3] = hy1
         if not bits:
             k = 0
             for e in range(edges.shape[0]):
@@ -1880,47 +1952,45 @@ def map_objects_kernel(
                 k += 1
             if k > 0:
                 out[g, M_SPACING] = np.median(lens[:k])
-        if out[g, M_NHIGH] == 0.0:
-            out[g, M_HEIGHT] = np.nan
-            for c in (M_F0, M_F1, M_L0, M_L1):
-                out[g, c] = np.nan
+    hstart[ngroups] = nhn
     if bits and ngroups > 0:
-        # Edges joining two high nodes of a group, counted per group, then gathered per group
-        # in edge order (CSR), then the median of each group's lengths.
+        # Edges joining two high nodes of a group: listed in one flat pass (each edge written
+        # and counted by whether it is one: a tenth of the edges, scattered), then counted
+        # per group, gathered per group (CSR), and each group's median taken.
         m = edges.shape[0]
-        start = np.zeros(ngroups + 1, np.int64)
-        shared = np.zeros(m, np.int64)
+        elist = np.empty(max(m, 1), np.int64)
+        ne = 0
         for e in range(m):
-            a = edges[e, 0]
-            b = edges[e, 1]
-            both = member[a] & member[b]
-            if both == 0 or not (nodes[a, 2] - ground > tol and nodes[b, 2] - ground > tol):
-                continue
-            shared[e] = both
-            for g in range(ngroups):
-                if (both >> g) & 1:
-                    start[g + 1] += 1
+            elist[ne] = e
+            ne += (hmember[edges[e, 0]] & hmember[edges[e, 1]]) != 0
+        start = np.zeros(ngroups + 1, np.int64)
+        for q in range(ne):
+            e = elist[q]
+            both = hmember[edges[e, 0]] & hmember[edges[e, 1]]
+            while both != 0:
+                start[trailing_zeros(both) + 1] += 1
+                both &= both - 1
         for g in range(ngroups):
             start[g + 1] += start[g]
         fill = start[:ngroups].copy()
         buf = np.empty(max(start[ngroups], 1))
-        for e in range(m):
-            both = shared[e]
-            if both == 0:
-                continue
+        for q in range(ne):
+            e = elist[q]
             a = edges[e, 0]
             b = edges[e, 1]
+            both = hmember[a] & hmember[b]
             dx = nodes[a, 0] - nodes[b, 0]
             dy = nodes[a, 1] - nodes[b, 1]
             d = np.sqrt(dx * dx + dy * dy)
-            for g in range(ngroups):
-                if (both >> g) & 1:
-                    buf[fill[g]] = d
-                    fill[g] += 1
+            while both != 0:
+                g = trailing_zeros(both)
+                buf[fill[g]] = d
+                fill[g] += 1
+                both &= both - 1
         for g in range(ngroups):
             if start[g + 1] > start[g]:
-                out[g, M_SPACING] = np.median(buf[start[g] : start[g + 1]])
-    return out
+                out[g, M_SPACING] = _median_sorting(buf, start[g], start[g + 1])
+    return out, hstart, hnode
 
 
 # Packed parameters of ``map_step_kernel`` (the pipeline's map-mode settings).
@@ -2060,6 +2130,8 @@ def _map_step(
     # in front of it have overlapping boxes, and merged, the block went into the wall.
     at_edge = np.zeros(nobj, np.bool_)
     single = np.empty((0, N_MAP_COLS))
+    shs = np.zeros(1, np.int64)  # the singles' high-node lists (map_objects_lists)
+    shn = np.empty(0, np.int64)
     if view_cut >= 0.0 and mq[Q_MERGE] != 0.0 and mq[Q_VIEW_FIRST] != 0.0:
         obj_of = np.full(nl, -1, np.int64)
         for a in range(nobj):
@@ -2067,7 +2139,7 @@ def _map_step(
         fsingle = np.empty(nf, np.int64)
         for f in range(nf):
             fsingle[f] = obj_of[flabels[f]]
-        single = map_objects_kernel(
+        single, shs, shn = map_objects_lists(
             nodes, edges, facets, fsingle, nobj, ground, tol, fx, fy, slope, bins, vedge
         )
         for a in range(nobj):
@@ -2113,9 +2185,13 @@ def _map_step(
             if first[g] < 0:
                 first[g] = k
             nmem[g] += 1
+    # Each group's high nodes: hnode[hstart[g]:hend[g]] (the rectangle's points).
     if ng == nobj and single.shape[0] == nobj:
         # No label merged: the groups are the labels in order, measured already.
         res = single
+        hstart = shs[:ng]
+        hend = shs[1:]
+        hnode = shn
     elif single.shape[0] == nobj:
         # Only the merged groups are measured again: a group of one label is that label,
         # measured already (map_objects_kernel measures each group on its own facets alone).
@@ -2128,17 +2204,33 @@ def _map_step(
         fmerged = np.empty(nf, np.int64)
         for f in range(nf):
             fmerged[f] = mid[fgroup[f]] if fgroup[f] >= 0 else -1
-        res2 = map_objects_kernel(
+        res2, mhs, mhn = map_objects_lists(
             nodes, edges, facets, fmerged, nmg, ground, tol, fx, fy, slope, bins, vedge
         )
         res = np.empty((ng, N_MAP_COLS))
         for g in range(ng):
             for c in range(N_MAP_COLS):
                 res[g, c] = res2[mid[g], c] if mid[g] >= 0 else single[gobj[g], c]
+        # The two lists one after the other; the merged groups' entries shifted by the first's.
+        nsh = shn.shape[0]
+        hnode = np.empty(nsh + mhn.shape[0], np.int64)
+        hnode[:nsh] = shn
+        hnode[nsh:] = mhn
+        hstart = np.empty(ng, np.int64)
+        hend = np.empty(ng, np.int64)
+        for g in range(ng):
+            if mid[g] >= 0:
+                hstart[g] = nsh + mhs[mid[g]]
+                hend[g] = nsh + mhs[mid[g] + 1]
+            else:
+                hstart[g] = shs[gobj[g]]
+                hend[g] = shs[gobj[g] + 1]
     else:
-        res = map_objects_kernel(
+        res, ghs, hnode = map_objects_lists(
             nodes, edges, facets, fgroup, ng, ground, tol, fx, fy, slope, bins, vedge
         )
+        hstart = ghs[:ng]
+        hend = ghs[1:]
     nout = nl - nobj + ng
     olab = np.empty((nout, N_LABEL_COLS))
     opos = np.empty((nout, 3))
@@ -2150,17 +2242,14 @@ def _map_step(
     out_of_group = np.full(ng, -1, np.int64)
     corr = mq[Q_EDGE_CORRECTION]
     use_rect = mq[Q_RECT] != 0.0
+    # The rectangle's work buffers, for the largest group's high nodes.
+    hmax = 0
     if use_rect:
-        n = nodes.shape[0]
-        rstamp = np.full(n, -1, np.int64)
-        rpf = np.empty(n)
-        rpl = np.empty(n)
-        rhull = np.empty(3 * n + 2, np.int64)
-    else:
-        rstamp = np.empty(0, np.int64)
-        rpf = np.empty(0)
-        rpl = rpf
-        rhull = rstamp
+        for g in range(ng):
+            hmax = max(hmax, hend[g] - hstart[g])
+    rpf = np.empty(hmax)
+    rpl = np.empty(hmax)
+    rhull = np.empty(3 * hmax + 2, np.int64)
     j = 0
     for k in range(nl):
         g = label_group[k]
@@ -2240,8 +2329,8 @@ def _map_step(
                     # the correction, projected on the walking direction and across it (an
                     # object about to be relabelled wall keeps its extents).
                     ra, rb, rc, rs = group_rect(
-                        nodes, facets, fgroup, g, ground, tol,
-                        mq[Q_RECT_HEIGHT] * res[g, M_HEIGHT], fx, fy, rstamp, rpf, rpl, rhull,
+                        nodes, hnode, hstart[g], hend[g], ground,
+                        mq[Q_RECT_HEIGHT] * res[g, M_HEIGHT], fx, fy, rpf, rpl, rhull,
                     )  # fmt: skip
                     cr = mq[Q_RECT_CORRECTION] * res[g, M_SPACING]
                     olab[j, L_WIDTH] = (ra + cr) * rs + (rb + cr) * rc

@@ -552,16 +552,19 @@ def test_group_rect_leaves_out_the_low_high_nodes():
     facets = np.vstack([facets, [[6, 10, 7]]])
     slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
     fgroup = np.zeros(len(facets), np.int64)
-    r = _k.map_objects_kernel(
+    res, hstart, hnode = _k.map_objects_lists(
         nodes, edges, facets, fgroup, 1, 0.0, 0.02, 1.0, 0.0, slope, bins, edge
-    )[0]  # fmt: skip
+    )  # fmt: skip
+    r = res[0]
     assert r[_k.M_NHIGH] == 10 and r[_k.M_F1] - r[_k.M_F0] == pytest.approx(0.15)
+    # the group's high nodes, each once: the grid's nine and the bevel node
+    assert hstart.tolist() == [0, 10] and sorted(hnode[:10].tolist()) == [*range(9), 10]
     n = len(nodes)
 
     def rect(zmin):
         return _k.group_rect(
-            nodes, facets, fgroup, 0, 0.0, 0.02, zmin, 1.0, 0.0, np.full(n, -1, np.int64),
-            np.empty(n), np.empty(n), np.empty(3 * n + 2, np.int64),
+            nodes, hnode, 0, 10, 0.0, zmin, 1.0, 0.0, np.empty(n), np.empty(n),
+            np.empty(3 * n + 2, np.int64),
         )  # fmt: skip
 
     a, b, c, s = rect(0.5 * 0.06)
