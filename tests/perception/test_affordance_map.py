@@ -594,6 +594,59 @@ def _rect_oracle(xy):
     return best[1:]
 
 
+def test_min_area_rect_equals_a_brute_force_search_on_random_points():
+    # The hull and calipers against every pair's direction (_rect_oracle), on random point
+    # sets, some on a 1 cm lattice (repeated, collinear and tied points); the points are
+    # passed in random order, as the groups' high-node lists come.
+    rng = np.random.default_rng(23)
+    for trial in range(150):
+        k = int(rng.integers(3, 40))
+        xy = rng.uniform(-0.15, 0.15, (k, 2)) + rng.uniform(0.3, 1.0, 2)
+        if trial % 3 == 0:
+            xy = np.round(xy, 2)
+        a, b, c, s = _k.min_area_rect(
+            xy[:, 0].copy(), xy[:, 1].copy(), k, np.empty(3 * k + 2, np.int64)
+        )  # fmt: skip
+        oa, ob, _, _ = _rect_oracle(xy)
+        assert a * b == pytest.approx(oa * ob, abs=1e-12)
+        # the same rectangle whatever the order of the points
+        p = rng.permutation(k)
+        again = _k.min_area_rect(
+            xy[p, 0].copy(), xy[p, 1].copy(), k, np.empty(3 * k + 2, np.int64)
+        )  # fmt: skip
+        assert again == (a, b, c, s)
+
+
+def test_map_objects_lists_high_nodes_and_median():
+    # Each group's list holds its distinct high nodes, and the spacing is np.median's value
+    # (odd and even edge counts), on random graphs split into random groups.
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        n = 60
+        nodes = np.column_stack([rng.uniform(0.4, 1.0, n), rng.uniform(-0.3, 0.3, n),
+                                 rng.choice([0.0, 0.05, 0.08], n)])  # fmt: skip
+        facets = np.array([rng.choice(n, 3, replace=False) for _ in range(80)], np.int64)
+        edges = np.unique(np.sort(np.vstack([facets[:, [0, 1]], facets[:, [1, 2]],
+                                             facets[:, [0, 2]]]), axis=1), axis=0)  # fmt: skip
+        ng = 4
+        fgroup = rng.integers(-1, ng, len(facets))
+        slope, bins, edge = _k.view_edge_kernel(nodes, 1.0, 0.0, ORIGIN, 16, 4.0)
+        res, hstart, hnode = _k.map_objects_lists(
+            nodes, edges, facets, fgroup, ng, 0.0, 0.02, 1.0, 0.0, slope, bins, edge
+        )  # fmt: skip
+        for g in range(ng):
+            ids = np.unique(facets[fgroup == g])
+            hi = ids[nodes[ids, 2] > 0.02]
+            listed = hnode[hstart[g] : hstart[g + 1]]
+            assert len(listed) == len(set(listed.tolist())) and set(listed.tolist()) == set(
+                hi.tolist()
+            )
+            both = np.isin(edges[:, 0], hi) & np.isin(edges[:, 1], hi)
+            d = nodes[edges[both, 0], :2] - nodes[edges[both, 1], :2]
+            lens = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+            assert res[g, _k.M_SPACING] == (np.median(lens) if len(lens) else 0.0)
+
+
 def test_map_mode_sizes_are_the_rectangle_of_the_upper_high_nodes():
     pipe, aff = _run("map")
     p = pipe.params
