@@ -119,6 +119,25 @@ a few µs either side from run to run. Tried and dropped (no gain on five graphs
 slower on one): region growing, labelling and all facet links written with selects instead of
 branches (the stack pointer and the visited flags then form a chain through memory); a
 separate facet-geometry pass for LLVM to vectorise (it did not).
+
+Notes (2026-12-04, issue 23, third round). The minimum-area rectangle (`map_rect`, fa5f6a7)
+cost about 4 µs a call on these graphs (`detect_map_kernel` with and without it, interleaved
+call by call: 123.2 / 119.4 µs), not in its hull (5-40 points) but in finding them: a scan of
+every facet for the group's, n-sized buffers and an argsort per call. Its points now come from
+the group's high-node list that `map_objects_lists` fills on its own pass, sorted by
+insertion. Stages of the kernel on the five graphs in turn (CPU cycle counter, medians):
+triangulation 43-46 µs, labelling 12, region growing 8-9, facet links 5, facet groups 4-5,
+then the map step: the per-label measures 11.7 -> 6.7 µs (high-node edges listed in one flat
+pass, the medians sorted in place instead of copied, the measures in locals), the merged
+groups' measures 6.2 -> 5.1, the output loop with the rectangle 4.9 -> 1.7. The same
+kernel on one graph called over and over: 62 µs against 96. Outputs bit for bit those of
+fa5f6a7 (every array of `detect_map_kernel`, 205 of this script's graphs and 120 rounded to
+1-3 cm, nine parameter sets). Before/after, this script (`--sizes 300 --repeats 300`) run
+three times each way in turn from fa5f6a7 and 9730037, CPU 1, load average 0.7-0.8:
+`AttentionPipeline.detect` 134.4 / 137.9 / 146.9 -> 129.6 / 130.2 / 136.6 µs, first call
+after a change of graph 140.6 / 142.4 / 148.7 -> 135.1 / 135.3 / 138.7 µs. Tried and dropped
+(1-2 µs slower, interleaved): the per-label measures and the labelling pass's node loop with
+selects instead of the repeated-node and high-node branches.
 """
 
 
