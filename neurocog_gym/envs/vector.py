@@ -21,7 +21,15 @@ What this one does instead:
   turn) for up to ``spin_seconds``, then by polling with sleeps that grow with the wait (0.2 ms
   up to 20 ms, 5 % of the time waited so far), so that a worker idles cheaply (about 1 % of a
   core) while the caller trains a network or steps other envs;
-* infos are batched by a cached plan into exactly what ``VectorEnv._add_info`` makes.
+* infos are batched by a cached plan into exactly what ``VectorEnv._add_info`` makes;
+* a Ctrl-C (a terminal sends SIGINT to the whole process group) makes each worker leave, its
+  envs closed, without answering, and the calling process raise KeyboardInterrupt where it waits
+  for that answer, if its own did not come first. On a cold numba cache the KeyboardInterrupt can
+  land in numba's compiler, where llvmlite's callbacks swallow it or numba raises another error
+  in its place (``RuntimeError: no compiled object yet``): a worker notes the Ctrl-C before it
+  raises and leaves all the same, and the calling process, whose own KeyboardInterrupt is lost
+  there just as often, gets one from the worker's leaving. Where that process ignores SIGINT or
+  handles it its own way (when the vector env is made), the workers ignore it.
 
 The results are those of ``SyncVectorEnv`` on the same env factories, bit for bit (the same
 seeding, the same next-step autoreset, the same info layout; ``tests/ecosystem/
@@ -42,6 +50,8 @@ from __future__ import annotations
 import multiprocessing
 import os
 import pickle
+import signal
+import sys
 import time
 import traceback
 from collections.abc import Callable, Sequence
@@ -64,7 +74,7 @@ from gymnasium.vector.vector_env import AutoresetMode, VectorEnv
 _STEP, _RESET, _CALL, _SET, _CLOSE, _APPLY = 1, 2, 3, 4, 5, 6
 _OK, _ERROR = 0, 1
 # ctrl fields of each worker (one int64 array in shared memory)
-_CMD_SEQ, _DONE_SEQ, _CMD, _NBYTES, _STATUS = range(5)
+_CMD_SEQ, _DONE_SEQ, _CMD, _NBYTES, _STATUS, _LEFT = range(6)
 _SCALARS = (int, float, bool)
 _yield = getattr(os, "sched_yield", lambda: None)
 """Called on every turn of a spin: lets anything else runnable have the core, and on this VM the
@@ -106,6 +116,23 @@ def _alive(pid: int) -> bool:
 def _nap(since: float) -> None:
     """Sleep once while polling, for longer the longer the wait that began at ``since`` lasts."""
     time.sleep(min(_SLEEP_MAX, max(_SLEEP, (time.perf_counter() - since) * _NAP_SHARE)))
+
+
+def _start_without_ctrl_c(proc) -> None:
+    """Start worker ``proc`` with SIGINT blocked, as it stays until it has its Ctrl-C handling.
+
+    A Ctrl-C while the worker starts would otherwise raise KeyboardInterrupt in multiprocessing's
+    bootstrap (a traceback); the worker sees it once it is ready, this process once the start is
+    done.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        proc.start()
+        return
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        proc.start()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
 
 class _Slot:
@@ -311,13 +338,75 @@ def _worker(
     spin_seconds,
     parent,
     slot_class=_Slot,
+    leave_on_ctrl_c=True,
 ):
-    """A worker process: makes the sub-envs ``indices`` and steps them, one after the other."""
+    """A worker process: makes the sub-envs ``indices`` and steps them, one after the other.
+
+    With ``leave_on_ctrl_c``, a Ctrl-C makes it leave without answering and set its ``_LEFT``
+    flag, even where numba swallowed the KeyboardInterrupt or raised another error in its place;
+    without, it ignores SIGINT (see the module docstring).
+    """
+    ctrl = np.frombuffer(ctrl_raw, dtype=np.int64)
+    interrupted: list[int] = []
+
+    def on_ctrl_c(signum, frame):
+        interrupted.append(signum)
+        raise KeyboardInterrupt
+
+    report_unraisable = sys.unraisablehook
+
+    def quiet_once_interrupted(unraisable):
+        # after a Ctrl-C, llvmlite's callbacks and finalizers report the KeyboardInterrupt they
+        # could not raise and the objects it left half made: the worker is leaving, not failing
+        if not interrupted:
+            report_unraisable(unraisable)
+
+    if leave_on_ctrl_c:
+        sys.unraisablehook = quiet_once_interrupted
+    slots: list[_Slot] = []
+    try:
+        try:
+            # SIGINT was blocked across the start (_start_without_ctrl_c): one sent before this
+            # is raised here at the earliest, inside this try
+            signal.signal(signal.SIGINT, on_ctrl_c if leave_on_ctrl_c else signal.SIG_IGN)
+            if hasattr(signal, "pthread_sigmask"):
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+            _serve(indices, env_fns, ctrl, buf_raw, act_raw, act_space, shm, space, num_envs,
+                   mode, spin_seconds, parent, slot_class, slots, interrupted)  # fmt: skip
+        finally:
+            for slot in slots:
+                slot.env.close()
+    except KeyboardInterrupt:
+        pass
+    if interrupted:
+        ctrl[_LEFT] = 1
+
+
+def _serve(
+    indices,
+    env_fns,
+    ctrl,
+    buf_raw,
+    act_raw,
+    act_space,
+    shm,
+    space,
+    num_envs,
+    mode,
+    spin_seconds,
+    parent,
+    slot_class,
+    slots,
+    interrupted,
+):
+    """The worker's life: makes its sub-envs into ``slots``, then answers commands.
+
+    It returns when told to close, when the parent is gone, or once a Ctrl-C is noted in
+    ``interrupted`` (the caller closes whatever is left in ``slots``).
+    """
     writer = _ObsWriter(space, shm, num_envs)
     act = _action_view(act_raw, act_space, len(indices))
-    ctrl = np.frombuffer(ctrl_raw, dtype=np.int64)
     buf = np.frombuffer(buf_raw, dtype=np.uint8)
-    slots: list[_Slot] = []
     # the parent may send its first command before this process gets here: the count starts at 0
     seen = 0
     # fork and spawn: the vector env's process is this one's parent (reparented when it dies);
@@ -332,86 +421,13 @@ def _worker(
         for i, fn in zip(indices, env_fns.fn, strict=True):
             current = i
             slots.append(slot_class(fn(), mode))
-        while True:
-            # wait for the next command: spin, then poll (and leave if the parent is gone)
-            if ctrl[_CMD_SEQ] == seen:
-                since = time.perf_counter()
-                deadline = since + spin_seconds
-                n = 0
-                while ctrl[_CMD_SEQ] == seen:  # spin, yielding the core each turn
-                    _yield()
-                    n += 1
-                    if n & 15 == 0 and time.perf_counter() > deadline:
-                        break
-                while ctrl[_CMD_SEQ] == seen:  # then poll
-                    _nap(since)
-                    if not parent_alive():
-                        return
-            seen = int(ctrl[_CMD_SEQ])
-            cmd = int(ctrl[_CMD])
-            current = indices[0]
-            try:
-                if cmd == _STEP:
-                    actions = _get(buf, ctrl) if act is None else act.copy()
-                    answers = []
-                    for j, i in enumerate(indices):
-                        current = i
-                        obs, reward, terminated, truncated, info = slots[j].step(actions[j])
-                        writer.write(i, obs)
-                        answers.append((reward, terminated, truncated, info))
-                    _put(buf, ctrl, answers)
-                elif cmd == _RESET:
-                    seeds, options, mask = _get(buf, ctrl)
-                    infos = []
-                    for j, i in enumerate(indices):
-                        current = i
-                        if mask[j]:
-                            obs, info = slots[j].reset(seeds[j], options)
-                            writer.write(i, obs)
-                            infos.append(info)
-                        else:
-                            infos.append(None)
-                    _put(buf, ctrl, infos)
-                elif cmd == _CALL:
-                    name, args, kwargs = _get(buf, ctrl)
-                    results = []
-                    for j, i in enumerate(indices):
-                        current = i
-                        results.append(slots[j].call(name, args, kwargs))
-                    _put(buf, ctrl, results)
-                elif cmd == _APPLY:
-                    fn, calls, kwargs = _get(buf, ctrl)
-                    results = {}
-                    for i, args in calls.items():
-                        current = i
-                        results[i] = fn(slots[i - indices[0]].env, *args, **kwargs)
-                    _put(buf, ctrl, results)
-                elif cmd == _SET:
-                    name, values = _get(buf, ctrl)
-                    for j, i in enumerate(indices):
-                        current = i
-                        setattr(slots[j].env, name, values[j])
-                    _put(buf, ctrl, None)
-                elif cmd == _CLOSE:
-                    for slot in slots:
-                        slot.env.close()
-                    slots = []
-                    _put(buf, ctrl, None)
-                ctrl[_STATUS] = _OK
-            except Exception as e:
-                message = f"{type(e).__name__}: {e}\n{traceback.format_exc()}"
-                _put(buf, ctrl, (current, message))
-                ctrl[_STATUS] = _ERROR
-            ctrl[_DONE_SEQ] = seen
-            if cmd == _CLOSE:
-                return
-    except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: leave quietly
-        return
     except Exception as e:  # a factory failed: report it on the first command
+        if interrupted:  # numba's error in place of a Ctrl-C's KeyboardInterrupt
+            return
         message = (
             f"creating env {current} failed: {type(e).__name__}: {e}\n{traceback.format_exc()}"
         )
-        while parent_alive():
+        while parent_alive() and not interrupted:
             if ctrl[_CMD_SEQ] != seen:
                 seen = int(ctrl[_CMD_SEQ])
                 _put(buf, ctrl, (None, message))
@@ -420,9 +436,84 @@ def _worker(
                 if int(ctrl[_CMD]) == _CLOSE:
                     return
             time.sleep(_SLEEP)
-    finally:
-        for slot in slots:
-            slot.env.close()
+        return
+    while not interrupted:  # (a KeyboardInterrupt that numba swallowed left only the note)
+        # wait for the next command: spin, then poll (and leave if the parent is gone)
+        if ctrl[_CMD_SEQ] == seen:
+            since = time.perf_counter()
+            deadline = since + spin_seconds
+            n = 0
+            while ctrl[_CMD_SEQ] == seen:  # spin, yielding the core each turn
+                _yield()
+                n += 1
+                if n & 15 == 0 and time.perf_counter() > deadline:
+                    break
+            while ctrl[_CMD_SEQ] == seen:  # then poll
+                _nap(since)
+                if not parent_alive():
+                    return
+        seen = int(ctrl[_CMD_SEQ])
+        cmd = int(ctrl[_CMD])
+        current = indices[0]
+        try:
+            if cmd == _STEP:
+                actions = _get(buf, ctrl) if act is None else act.copy()
+                answers = []
+                for j, i in enumerate(indices):
+                    current = i
+                    obs, reward, terminated, truncated, info = slots[j].step(actions[j])
+                    writer.write(i, obs)
+                    answers.append((reward, terminated, truncated, info))
+                _put(buf, ctrl, answers)
+            elif cmd == _RESET:
+                seeds, options, mask = _get(buf, ctrl)
+                infos = []
+                for j, i in enumerate(indices):
+                    current = i
+                    if mask[j]:
+                        obs, info = slots[j].reset(seeds[j], options)
+                        writer.write(i, obs)
+                        infos.append(info)
+                    else:
+                        infos.append(None)
+                _put(buf, ctrl, infos)
+            elif cmd == _CALL:
+                name, args, kwargs = _get(buf, ctrl)
+                results = []
+                for j, i in enumerate(indices):
+                    current = i
+                    results.append(slots[j].call(name, args, kwargs))
+                _put(buf, ctrl, results)
+            elif cmd == _APPLY:
+                fn, calls, kwargs = _get(buf, ctrl)
+                results = {}
+                for i, args in calls.items():
+                    current = i
+                    results[i] = fn(slots[i - indices[0]].env, *args, **kwargs)
+                _put(buf, ctrl, results)
+            elif cmd == _SET:
+                name, values = _get(buf, ctrl)
+                for j, i in enumerate(indices):
+                    current = i
+                    setattr(slots[j].env, name, values[j])
+                _put(buf, ctrl, None)
+            elif cmd == _CLOSE:
+                for slot in slots:
+                    slot.env.close()
+                slots.clear()
+                _put(buf, ctrl, None)
+            ctrl[_STATUS] = _OK
+        except Exception as e:
+            if interrupted:  # numba's error in place of a Ctrl-C's KeyboardInterrupt
+                return
+            message = f"{type(e).__name__}: {e}\n{traceback.format_exc()}"
+            _put(buf, ctrl, (current, message))
+            ctrl[_STATUS] = _ERROR
+        if interrupted and cmd != _CLOSE:
+            return
+        ctrl[_DONE_SEQ] = seen
+        if cmd == _CLOSE:
+            return
 
 
 class SpinVectorEnv(_BatchedInfos, VectorEnv):
@@ -511,8 +602,11 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
         self._writer = _ObsWriter(self.single_observation_space, self._shm, self.num_envs)
         self._ctrl, self._buf, self._act = [], [], []
         self._closed = False
+        self._interrupted = False
+        # the workers follow this process's Ctrl-C as it stands now (see the module docstring)
+        leave_on_ctrl_c = signal.getsignal(signal.SIGINT) is signal.default_int_handler
         for k, group in enumerate(self.groups[1:], start=1):
-            ctrl_raw = ctx.RawArray("q", 5)
+            ctrl_raw = ctx.RawArray("q", 6)
             buf_raw = ctx.RawArray("B", int(payload_bytes))
             act_raw = _shared_action_raw(ctx, self.single_action_space, len(group))
             self._ctrl.append(np.frombuffer(ctrl_raw, dtype=np.int64))
@@ -535,10 +629,11 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
                     self.spin_seconds,
                     os.getpid(),
                     self._slot_class,
+                    leave_on_ctrl_c,
                 ),
                 daemon=True,
             )
-            proc.start()
+            _start_without_ctrl_c(proc)
             self._procs.append(proc)
         self._info_plans: dict[tuple, _InfoPlan] = {}
         self._rewards = np.zeros(self.num_envs, dtype=np.float64)
@@ -546,7 +641,7 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
         self._truncations = np.zeros(self.num_envs, dtype=np.bool_)
         try:
             self._check_spaces()
-        except Exception:
+        except BaseException:
             self.close()
             raise
 
@@ -602,6 +697,9 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
                     break
             while ctrl[_DONE_SEQ] != target:  # then poll
                 _nap(since)
+                if ctrl[_LEFT]:  # on a Ctrl-C, which this process may not have seen (numba)
+                    self._interrupted = True
+                    raise KeyboardInterrupt
                 if not proc.is_alive() and ctrl[_DONE_SEQ] != target:
                     self._closed = True
                     raise RuntimeError(
@@ -635,21 +733,29 @@ class SpinVectorEnv(_BatchedInfos, VectorEnv):
     def _local(self, ks, fn, *args):
         """``fn(*args)`` in this process while workers ``ks`` work.
 
-        If it raises, the workers' answers are collected (and dropped) before the error goes on.
+        If it raises, the workers' answers are collected (and dropped) before the error goes on;
+        a KeyboardInterrupt instead if a worker left on a Ctrl-C (the error is then numba's, whose
+        compiler turns a KeyboardInterrupt into another error or none).
         """
         try:
             return fn(*args)
-        except BaseException:
+        except BaseException as e:
             for k in ks:
                 try:
                     self._receive(k)
-                except RuntimeError:
+                except (RuntimeError, KeyboardInterrupt):
                     pass
+            # a worker may have answered before its Ctrl-C came, and left while waiting
+            self._interrupted |= any(self._ctrl[k][_LEFT] for k in self._workers)
+            if self._interrupted and not isinstance(e, KeyboardInterrupt):
+                raise KeyboardInterrupt from e
             raise
 
     def _check_open(self) -> None:
         if self._closed:
             raise RuntimeError("SpinVectorEnv is closed")
+        if self._interrupted:
+            raise RuntimeError("SpinVectorEnv's workers left on a Ctrl-C: close it")
 
     # -- Gymnasium's VectorEnv API -----------------------------------------------------------------
 

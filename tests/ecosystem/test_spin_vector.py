@@ -308,6 +308,79 @@ def test_a_killed_worker_is_an_error_not_a_hang():
         envs.close()
 
 
+class _InterruptedEnv(_TinyEnv):
+    """A tiny env whose third step is cut short by a Ctrl-C.
+
+    With ``victim`` (a worker's pid) set, the Ctrl-C reaches that worker, and this process's
+    KeyboardInterrupt comes out as another error, as numba's compiler may turn it on a cold cache.
+    """
+
+    victim = None
+
+    def step(self, action):
+        if self.t == 2:
+            if self.victim is None:
+                raise KeyboardInterrupt
+            os.kill(self.victim, signal.SIGINT)
+            time.sleep(0.2)  # by now the worker has noted it and left
+            raise RuntimeError("no compiled object yet for <Library 'kernel'>")
+        return super().step(action)
+
+
+@needs_workers
+def test_a_ctrl_c_in_the_calling_process_leaves_it_free_to_close_the_workers():
+    envs = SpinVectorEnv([_InterruptedEnv, _tiny(1)])
+    procs = list(envs._procs)
+    envs.reset(seed=0)
+    for _ in range(2):
+        envs.step(np.zeros((2, 2), np.float32))
+    with pytest.raises(KeyboardInterrupt):
+        envs.step(np.zeros((2, 2), np.float32))
+    assert procs[0].is_alive()  # the worker's answer was collected: it waits for the next command
+    t0 = time.perf_counter()
+    envs.close()
+    assert time.perf_counter() - t0 < 2 and procs[0].exitcode == 0
+
+
+@needs_workers
+def test_a_ctrl_c_seen_by_a_worker_alone_is_a_keyboard_interrupt_here():
+    # The case of a KeyboardInterrupt that numba's compiler swallowed in this process.
+    envs = SpinVectorEnv([_tiny(0), _tiny(1)])
+    proc = envs._procs[0]
+    envs.reset(seed=0)
+    os.kill(proc.pid, signal.SIGINT)
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        envs.step(np.zeros((2, 2), np.float32))
+    assert time.perf_counter() - t0 < 2
+    with pytest.raises(RuntimeError, match="left on a Ctrl-C"):
+        envs.step(np.zeros((2, 2), np.float32))
+    envs.close()
+    assert proc.exitcode == 0
+    # this process's step fails with numba's error in place of its KeyboardInterrupt
+    envs = SpinVectorEnv([_InterruptedEnv, _tiny(1)])
+    envs._slots[0].env.victim = envs._procs[0].pid
+    envs.reset(seed=0)
+    for _ in range(2):
+        envs.step(np.zeros((2, 2), np.float32))
+    with pytest.raises(KeyboardInterrupt) as caught:
+        envs.step(np.zeros((2, 2), np.float32))
+    assert "no compiled object" in str(caught.value.__cause__)
+    envs.close()
+
+
+@needs_workers
+def test_workers_ignore_ctrl_c_where_the_calling_process_does():
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        sync, spin = SyncVectorEnv([_tiny(0), _tiny(1)]), SpinVectorEnv([_tiny(0), _tiny(1)])
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    os.kill(spin._procs[0].pid, signal.SIGINT)
+    time.sleep(0.2)
+    _assert_same_rollouts(sync, spin, 12, 7)
+
+
 def test_close_stops_the_workers_and_spin_budget_follows_the_cores():
     cpus = len(os.sched_getaffinity(0))
     crowded = SpinVectorEnv([_tiny(i) for i in range(3)], processes=cpus + 1)
@@ -439,26 +512,38 @@ def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
         pytest.fail(f"worker {pid} still runs 10 s after its vector env's process died")
 
 
+# A SIGINT ignored by whatever started pytest stays ignored in every process it starts, and a
+# backgrounded run (`( make test & )`, `nohup make test &`, `bash -c '... &'`) starts it so: the
+# script never saw the Ctrl-C and stepped on, parent and worker at full CPU, until the timeout
+# (3 of 3 runs with pytest started under SIG_IGN, 5 of 5 of a Ctrl-C probe started with
+# `( ... & )`; 0 of 20 in the foreground on a cold numba cache under load; a foreground
+# fresh-clone `make test` passed with this test in it). That is the hang of the 4 fresh-clone
+# suites of 2026-12-04. The script takes Ctrl-C back as a shell's foreground job has it, and is
+# started with SIGINT ignored every time, so that the test does not depend on the launch.
+_IGNORING_SIGINT = (
+    "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_IGN); "
+    "os.execv(sys.executable, [sys.executable, sys.argv[1]])"
+)
+
+
 @needs_workers
-# Known bug, not found: in a fresh clone's full suite the interrupted script's main process and
-# worker keep spinning after the SIGINT (4 of 4 fresh-clone runs on 2026-12-04); alone, or once
-# numba's cache is written, it passes. Out of `make test` until found; `make test-all` runs it.
-@pytest.mark.slow
 def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
     import subprocess
     import sys
 
     script = tmp_path / "interrupt.py"
     script.write_text(
-        "import numpy as np, gymnasium as gym\n"
+        "import signal, numpy as np, gymnasium as gym\n"
         "from neurocog_gym.envs.vector import SpinVectorEnv\n"
         "def make():\n"
         "    return gym.make('NeuroCog/Walk-v1')\n"
         "if __name__ == '__main__':\n"
+        "    signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "    v = SpinVectorEnv([make, make])\n"
         "    v.reset(seed=0)\n"
-        # Steps before the pid, so every kernel is compiled before the Ctrl-C: the test hung in
-        # fresh clones (cold numba cache) and passed once the kernels were cached.
+        # Steps before the pid, so that the Ctrl-C does not land in numba's compiler on a cold
+        # cache: llvmlite then reports on stderr the KeyboardInterrupt it swallowed in this
+        # process, vector env or not (the vector env still stops: the worker's leaving raises it).
         "    for _ in range(20):\n"
         "        v.step(np.zeros((2, 15), np.float32))\n"
         "    print(v._procs[0].pid, flush=True)\n"
@@ -469,8 +554,9 @@ def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
         "        v.close()\n"
         "        print('interrupted', flush=True)\n"
     )
-    proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)  # fmt: skip
+    proc = subprocess.Popen([sys.executable, "-c", _IGNORING_SIGINT, str(script)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)  # fmt: skip
     try:
         pid = int(proc.stdout.readline())
         time.sleep(1.0)
