@@ -1,5 +1,6 @@
-"""The AEF figure scripts end to end on one seeded sudden episode (Fig. 18 and the strip)."""
+"""The figure and diagnostic scripts end to end on seeded sudden episodes (Fig. 18, the strip, first contacts)."""
 
+import ast
 import os
 import re
 import subprocess
@@ -37,3 +38,18 @@ def test_strip_picks_four_frames_around_the_stop(tmp_path):
               "--height", "120", "--out", out])  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert iio.imread(out).shape == (120, 640, 3)
+
+
+def test_trial_contacts_lists_each_trials_first_block_contacts():
+    r = _run([SCRIPTS / "trial_contacts.py", "--policy", "blind", "--trials", "2"])
+    assert r.returncode == 0, r.stderr
+    rows = re.findall(r"^\s+(\d) (success|touch|fail)\s.*block L 0\.\d{3} W 0\.\d{3} H 0\.0\d{2}",
+                      r.stdout, re.M)  # fmt: skip
+    assert [int(i) for i, _ in rows] == [0, 1]
+    counted = re.search(r"^outcomes: (\{.*\}) of 2$", r.stdout, re.M)
+    assert counted and sum(ast.literal_eval(counted.group(1)).values()) == 2
+    # the blind trot walks into every sudden block: each trial names the geom it met first
+    assert re.search(r"^first contact in 2 of 2 trials; within 0.15 s of the appearance: [012];",
+                     r.stdout, re.M)  # fmt: skip
+    bad = _run([SCRIPTS / "trial_contacts.py", "--trials", "0"])
+    assert bad.returncode != 0 and "--trials must be at least 1" in bad.stderr
