@@ -61,9 +61,12 @@ Two affordance sources (``PipelineParams.affordance_source``): everything above 
 graph's nodes and facets, with the map-mode steps (:meth:`AttentionPipeline._detect_map`):
 heights against the floor plane of the terrain nodes, overlapping object labels merged (not a
 label at the view edge), width and length grown by the node spacing at the edges (boundary
-handling), the box (Algorithm 3's A_min/A_max, hence the attention box) on the high nodes, and
-objects at the top of the graph's own view relabelled wall. In "map" mode these steps are compiled
-into the detection's call, and the ``"affordance"`` timing holds both (``"refine"`` is 0).
+handling; with ``map_rect``, from the minimum-area rectangle round the high nodes at least half
+the height up, projected on the walking axes), the box (Algorithm 3's A_min/A_max, hence the
+attention box) on the high nodes and, with ``map_attend_above``, starting at the ground
+tolerance above the floor plane, and objects at the top of the graph's own view relabelled wall.
+In "map" mode these steps are compiled into the detection's call, and the ``"affordance"``
+timing holds both (``"refine"`` is 0).
 ``scripts/bench_affordance_map.py`` measures both sources.
 """
 
