@@ -34,25 +34,36 @@ from neurocog_gym.locomotion._avoidance_kernel import (
 
 
 @njit(cache=True)
-def walk_around_kernel(hip, front_legs, hx, hy, boxes, lookahead, near, corridor, provision):
-    """Walking provision for the nearest box in the corridor ahead, written into ``provision``.
+def walk_around_kernel(
+    hip, feet, front_legs, hx, hy, boxes, lookahead, corridor, beside, cor_min, cor_gain,
+    provision,
+):  # fmt: skip
+    """The walk-round rule's provision for the boxes on and beside the path, into ``provision``.
 
     Args:
-        hip: (4, 3) hip positions, m; the corridor starts between the front legs' hips.
+        hip: (4, 3) hip positions, m; the corridor is centred between the front legs' hips.
+        feet: (4, 3) sole centres, m; a box every foot is 3 cm past no longer counts.
         front_legs: (2,) int64 indices of the front legs.
-        hx: cos of the heading.
-        hy: sin of the heading.
+        hx: cos of the path's heading (the teacher's first heading, ``SuddenAvoidance.yaw0``).
+        hy: sin of the path's heading.
         boxes: (K, 2, 3) obstacle boxes (min/max corners), m.
         lookahead: ``FitParams.lookahead``, m.
-        near: ``FitParams.near``, m.
         corridor: ``FitParams.corridor``, m.
+        beside: ``FitParams.beside``, m.
+        cor_min: ``FitParams.cor_min``.
+        cor_gain: ``FitParams.cor_gain``, 1/m.
         provision: (3,) written: (s_SAG, s_COR, s_DIR); zeros when no box counts.
 
-    Only boxes whose near side lies beyond ``near`` and within ``lookahead`` ahead and that
-    overlap the corridor count.
+    A box counts from ``lookahead`` ahead of the front hips until every foot is past it, if it
+    lies within ``corridor + beside`` of the corridor's centre line (across the path's
+    heading). Each box is passed on the side that needs the shorter shift of the corridor; the
+    shift that clears every box on its side (for a box alongside: keeps it clear) is stepped
+    by s_COR = ±min(1, ``cor_min`` + ``cor_gain`` · shift). Where the boxes passed on the left
+    and on the right leave no room between them, the nearest box decides. s_SAG and s_DIR
+    stay 0.
 
     Returns:
-        The box's index, or -1.
+        The index of the nearest box that counts, or -1.
     """
     fx = 0.0
     fy = 0.0
@@ -62,9 +73,15 @@ def walk_around_kernel(hip, front_legs, hx, hy, boxes, lookahead, near, corridor
     fx /= len(front_legs)
     fy /= len(front_legs)
     lx, ly = -hy, hx
+    rear = np.inf
+    for leg in range(4):
+        rear = min(rear, (feet[leg, 0] - fx) * hx + (feet[leg, 1] - fy) * hy)
+    band = corridor + beside
+    lo = -np.inf  # the corridor's shift to the left must be at least this ...
+    hi = np.inf  # ... and at most this
     best = -1
     best_d = np.inf
-    lateral = 0.0
+    best_left = True
     for k in range(boxes.shape[0]):
         a_lo, a_hi = np.inf, -np.inf
         s_lo, s_hi = np.inf, -np.inf
@@ -76,24 +93,33 @@ def walk_around_kernel(hip, front_legs, hx, hy, boxes, lookahead, near, corridor
                 s = rx * lx + ry * ly
                 a_lo, a_hi = min(a_lo, a), max(a_hi, a)
                 s_lo, s_hi = min(s_lo, s), max(s_hi, s)
-        if a_hi < 0.0 or a_lo > lookahead:
+        if a_hi < rear - 0.03 or a_lo > lookahead:
             continue
-        # The box blocks the corridor if its lateral extent overlaps [-corridor, corridor].
-        if s_lo > corridor or s_hi < -corridor:
+        if s_lo > band or s_hi < -band:
             continue
-        d = max(a_lo, 0.0)
-        if d < near:
-            continue
-        if d < best_d:
-            best, best_d = k, d
-            # Move to the side that needs the shorter side step.
-            go_left = abs(s_lo - corridor) > abs(s_hi + corridor)
-            need = (s_hi + corridor) if go_left else (corridor - s_lo)
-            lateral = (1.0 if go_left else -1.0) * min(1.0, 0.4 + 2.5 * need)
+        need_left = s_hi + corridor
+        need_right = corridor - s_lo
+        go_left = need_left < need_right
+        if go_left:
+            lo = max(lo, need_left)
+        else:
+            hi = min(hi, -need_right)
+        if a_lo < best_d:
+            best, best_d, best_left = k, a_lo, go_left
     provision[:] = 0.0
-    if best >= 0:
-        provision[0] = -0.3 if best_d < 0.6 else 0.0
-        provision[1] = lateral
+    if best < 0:
+        return -1
+    shift = 0.0
+    if lo > 0.0 and hi < 0.0:
+        shift = lo if best_left else hi  # no room between them: the nearest box decides
+    elif lo > 0.0:
+        shift = lo
+    elif hi < 0.0:
+        shift = hi
+    if shift > 0.0:
+        provision[1] = min(1.0, cor_min + cor_gain * shift)
+    elif shift < 0.0:
+        provision[1] = -min(1.0, cor_min - cor_gain * shift)
     return best
 
 
@@ -135,12 +161,12 @@ def interrupt_target(direction, hit, feet, boxes):
 # The compiled decision (``decide_kernel``): the fit's parameters in one float64 array
 # (``fit.kernel_params``), the teacher's state in a float64 and an int64 array.
 (
-    P_LOOKAHEAD, P_NEAR, P_CORRIDOR, P_ENABLED, P_TRIGGER, P_LANE_R, P_LANE_HYSTERESIS,
+    P_LOOKAHEAD, P_BESIDE, P_CORRIDOR, P_ENABLED, P_TRIGGER, P_LANE_R, P_LANE_HYSTERESIS,
     P_SUDDEN_RANGE, P_MIN_HEIGHT, P_STEP_OVER_HEIGHT, P_SAME_BOX, P_T_REV, P_BACKOFF, P_K_SIDE,
     P_KX, P_SIDE_BACKOFF, P_K_MIN, P_K_MAX, P_SIDE_COR, P_SIDE_DIR, P_COR_GAIN, P_DIR_GAIN,
-    P_SAG_GAIN, P_BRAKE_FROM,
-) = range(24)  # fmt: skip
-N_PARAMS = 24
+    P_SAG_GAIN, P_BRAKE_FROM, P_SIDE_DIR_FF, P_WR_COR_MIN, P_WR_COR_GAIN,
+) = range(27)  # fmt: skip
+N_PARAMS = 27
 TF_T_STATE, TF_DIRECTION, TF_YAW0, TF_C, TF_S, TF_FAR = range(6)
 """Teacher floats: state entry time, side-step sign, first heading, its cos and sin, far face."""
 N_TF = 6
@@ -235,6 +261,15 @@ def teacher_adopt(box, feet, par, tf, ti, known, known_sudden):
 
 
 @njit(cache=True)
+def teacher_heading(yaw, tf, ti):
+    """``SuddenAvoidance.set_heading``: the first heading seen becomes the path's (``yaw0``)."""
+    if ti[TI_HAS_YAW0] == 0:
+        tf[TF_YAW0] = yaw
+        tf[TF_C], tf[TF_S] = math.cos(yaw), math.sin(yaw)
+        ti[TI_HAS_YAW0] = 1
+
+
+@njit(cache=True)
 def _set_state(state, t, tf, ti):
     if state != ti[TI_STATE]:
         ti[TI_STATE] = state
@@ -268,10 +303,7 @@ def teacher_update(
     Returns:
         Whether the teacher is engaged (``update`` returned an array, not None).
     """
-    if ti[TI_HAS_YAW0] == 0:
-        tf[TF_YAW0] = yaw
-        tf[TF_C], tf[TF_S] = math.cos(yaw), math.sin(yaw)
-        ti[TI_HAS_YAW0] = 1
+    teacher_heading(yaw, tf, ti)
     if par[P_ENABLED] == 0.0 or (ti[TI_STATE] == WALK and boxes.shape[0] == 0):
         return False
     c, s = tf[TF_C], tf[TF_S]
@@ -320,7 +352,7 @@ def teacher_update(
             k = _pmin(_pmax(k, par[P_K_MIN]), par[P_K_MAX])
         sag = sag_for_stride(1.0 - k, par[P_SAG_GAIN], par[P_BRAKE_FROM])
         cor = direction * par[P_SIDE_COR]
-        turn = -par[P_SIDE_DIR] * ey
+        turn = -par[P_SIDE_DIR] * ey - direction * par[P_SIDE_DIR_FF]
     else:
         need = out[O_NEED_LEFT] if direction > 0 else out[O_NEED_RIGHT]
         deficit = need if out[O_N_REL] > 0 else 0.0
@@ -350,6 +382,7 @@ def decide_kernel(
     """
     provision[:] = 0.0
     slots[:] = 0.0
+    teacher_heading(yaw, tf, ti)
     target = interrupt_target(direction, hit, feet, boxes)
     mode = MODE_NONE
     interrupted = False
@@ -362,8 +395,8 @@ def decide_kernel(
         slots[:] = direction
     elif boxes.shape[0] > 0:
         target = walk_around_kernel(
-            hips, front_legs, np.cos(yaw), np.sin(yaw), boxes, par[P_LOOKAHEAD], par[P_NEAR],
-            par[P_CORRIDOR], provision,
+            hips, feet, front_legs, tf[TF_C], tf[TF_S], boxes, par[P_LOOKAHEAD],
+            par[P_CORRIDOR], par[P_BESIDE], par[P_WR_COR_MIN], par[P_WR_COR_GAIN], provision,
         )  # fmt: skip
         if target >= 0:
             mode = MODE_PROVISION

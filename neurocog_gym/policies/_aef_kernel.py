@@ -10,7 +10,9 @@ import numpy as np
 from numba import njit
 
 # numba's cache keys a compiled function on its own file only: after editing _fit_kernel.py or
-# _avoidance_kernel.py, clear this file's cache (__pycache__/_aef_kernel*.nb*) or touch it.
+# _avoidance_kernel.py, clear this file's cache (__pycache__/_aef_kernel*.nb*) or touch it, and
+# change this file in the commit, so that a checkout's cached policy_step is compiled again
+# (last: the walk-round revised for body v1, issue 22, 2026-12-05).
 from neurocog_gym.locomotion._fit_kernel import MODE_NONE, decide_kernel
 
 # ``policy_step``'s state: floats (``sf``) and integers (``si``); the fit's teacher follows

@@ -7,14 +7,17 @@ Dataset rows (31 inputs, see ``locomotion.aef.INPUT_NAMES``):
   A_s are drawn at random (on the stand there is no object; the head must not depend on them).
   Target: the interrupt head's 12 outputs = the babbled command Theta(t-1).
 * **Provision rows** (geometric teacher): the fit's two provision rules — the
-  walk-around of an obstacle ahead (``_fit_kernel.walk_around_kernel``: s_SAG -0.3 or 0, s_COR,
-  s_DIR 0) and the stop / side-step / pass of a block that appears within reach
+  walk-around of an obstacle on or beside the path (``_fit_kernel.walk_around_kernel``: s_SAG
+  0, s_COR, s_DIR 0) and the stop / side-step / pass of a block that appears within reach
   (``locomotion/avoidance.py``: s_SAG down to -1, the brake; s_COR ±1; s_DIR holding the
   heading) — fill every leg's direction slot with the body motion (s_SAG, s_COR, s_DIR) they
   chose; the provision head learns to output (s_SAG, s_COR, s_DIR) = (d_x, d_y, d_z) from those
   inputs. Rows draw s_SAG from [-1, 0.2] (a quarter of them exactly -1, the back-off), s_COR
   from [-1, 1] (a fifth 0, a fifth ±1) and s_DIR from [-1, 1] (half of them 0). Joint angles
-  and touch come from babbling rows, A at random.
+  and touch come from babbling rows, A at random. The rows sample that range, not the rules'
+  outputs, so a change of the rules within it leaves the dataset, and the trained weights, as
+  they were (issue 22, 2026-12-05: retrained after the walk-round's change, bit for bit the
+  shipped file).
 
 Loss: mean squared error of each head on its own rows. Validation: a held-out 20 % split;
 ``baseline_val_loss`` is the loss of predicting the training mean. Early stopping on the

@@ -85,13 +85,22 @@ def test_back_off_then_side_step_then_pass_then_walk():
     assert av.state == REVERSE
     out = av.update(p.t_rev, 0.0, f, t, k, b)
     assert av.state == SIDE
-    # Side step to the right (direction -1), the hips cancelled by k = 1 + 10 (0.07 - gap) with
-    # gap = 0.25 - 0.164 = 0.086 -> k clipped to k_min = 1: stride 0 (march in place).
+    # Side step to the right (direction -1), the hips cancelled by k = 0.75 + 10 (0.07 - gap)
+    # with gap = 0.25 - 0.164 = 0.086 -> 0.59, clipped to k_min = 0.7: stride 0.3 ahead, s_SAG
+    # = -1 + 1.3 * 0.5 / 1.7 (below brake_from: stride -1 at s_SAG -1, 0.7 at -0.5).
     assert out[1] == -1.0
-    assert out[0] == pytest.approx(-0.5 - 0.7 / 3.4)
-    # A heading error of 0.1 rad: s_DIR = -2 * 0.1.
+    assert out[0] == pytest.approx(-1.0 + 1.3 * 0.5 / 1.7)
+    # No heading error: s_DIR leans left against the right step's turn, +0.5; with an error of
+    # 0.1 rad: 0.5 - 2 * 0.1.
+    assert out[2] == pytest.approx(0.5)
     out = av.update(p.t_rev + 0.01, 0.1, f, t, k, b)
-    assert out[2] == pytest.approx(-0.2)
+    assert out[2] == pytest.approx(0.3)
+    # A leg 3 cm from the near face (reach 0.174 + 0.046 = 0.22): k = 0.75 + 10 * 0.04 = 1.15,
+    # stride -0.15: the hips step back. s_SAG = -1 + 0.85 * 0.5 / 1.7.
+    f2, t2, k2 = legs(dx=0.046)
+    out = av.update(p.t_rev + 0.015, 0.0, f2, t2, k2, b)
+    assert av.state == SIDE
+    assert out[0] == pytest.approx(-1.0 + 0.85 * 0.5 / 1.7)
     # Shifted right by 0.2 m: the left lanes end at 0.12 - 0.2 + 0.058 < 0.05: clear -> pass.
     f, t, k = legs(dx=-0.01, dy=-0.2)
     out = av.update(p.t_rev + 0.02, 0.0, f, t, k, b)
