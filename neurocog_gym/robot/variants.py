@@ -8,6 +8,13 @@ under its hip. The motor-neuron pools drive such a leg in leg coordinates
 (``locomotion.motor.leg_coordinates``), so the shipped gait and interrupts move its feet as they
 move body v1's. ``scripts/stepover_geometry.py`` gives the reason in numbers; the envs still use
 body v1 until v2 is tuned and benchmarked (docs/oracle_notes.md).
+
+``kinked_shank`` keeps body v1's joints, gait and kinematics (knee to foot stays 0.20 m) and
+bends each shank's collision capsule so that its lowest ``low`` metres stand upright when the
+shank pitches ``pitch`` rad (the gait's shank pitch at the moments a sole meets a block's
+face): the part of the leg at a block's height is then the segment above the sole, not a
+shank that leads it by 10-17 cm. A rigid bent tube, no new joint; the same idea as the
+pantograph legs whose lowest segment stays upright. Measured in docs/oracle_notes.md.
 """
 
 from __future__ import annotations
@@ -51,6 +58,57 @@ def knee_behind(scene: str | Path | None = None) -> mujoco.MjSpec:
         qpos[q_hip] = qpos[q_hip] + qpos[q_hip + 1]
         ctrl[c_hip] = ctrl[c_hip] + ctrl[c_hip + 1]
     key.qpos, key.ctrl = qpos.tolist(), ctrl.tolist()
+    return spec
+
+
+KINKED_LOW = 0.10
+"""Length of a kinked shank's lower, upright segment, m (above the 6-8 cm blocks' tops)."""
+KINKED_PITCH = 0.8
+"""Shank pitch (hip + knee angle, rad) at which the lower segment is vertical: body v1's home
+pose (hip -0.8, knee 1.6) and its shank at the end of a stance and the start of a swing."""
+
+
+def kinked_shank(
+    scene: str | Path | None = None, low: float = KINKED_LOW, pitch: float = KINKED_PITCH
+) -> mujoco.MjSpec:
+    """The scene's spec with every shank's collision capsule bent (module docstring).
+
+    Each ``{leg}_shank`` capsule runs from the knee to a kink point ``low`` above the foot's
+    centre along the direction that is vertical at shank pitch ``pitch``; a new capsule
+    ``{leg}_shank_low`` (same radius, class and collision bits) runs from there to the foot.
+    The shank's mass is split between the two by length; the joints, the foot and every
+    other body are unchanged.
+
+    Args:
+        scene: the scene XML (default: the shipped ``scene.xml``).
+        low: length of the lower, upright segment, m (0 < low < 0.2).
+        pitch: shank pitch at which that segment is vertical, rad (|pitch| < pi / 2).
+    """
+    if not 0.0 < low < 0.2:
+        raise ValueError(f"low must lie in (0, 0.2) m, got {low}")
+    if not abs(pitch) < np.pi / 2:
+        raise ValueError(f"pitch must lie in (-pi/2, pi/2) rad, got {pitch}")
+    spec = mujoco.MjSpec.from_file(str(scene or paths.asset(paths.SCENE_XML)))
+    for prefix in names.LEGS:
+        shank = spec.geom(f"{prefix}_shank")
+        if shank is None:
+            raise KeyError(f"the scene has no geom {prefix}_shank")
+        ends = np.array(shank.fromto, dtype=np.float64)  # a copy: fromto is a view of the spec
+        start, foot = ends[:3], ends[3:]
+        # In the shank's frame the direction R_y(-pitch) z is world-vertical at that pitch.
+        kink = foot + low * np.array([-np.sin(pitch), 0.0, np.cos(pitch)])
+        upper = float(np.linalg.norm(kink - start))
+        mass = shank.mass
+        shank.fromto = [*start, *kink]
+        shank.mass = mass * upper / (upper + low)
+        g = shank.parent.add_geom()
+        g.name = f"{prefix}_shank_low"
+        g.type = mujoco.mjtGeom.mjGEOM_CAPSULE
+        g.fromto = [*kink, *foot]
+        g.size = shank.size
+        g.mass = mass * low / (upper + low)
+        g.rgba, g.group = shank.rgba, shank.group
+        g.contype, g.conaffinity, g.condim = shank.contype, shank.conaffinity, shank.condim
     return spec
 
 

@@ -10,6 +10,7 @@ from neurocog_gym.policies.base import ACTION_DIM
 
 import os
 REACH = float(os.environ.get("REACH", 0.09)); SWING = float(os.environ.get("SWING", 0.29))
+GATE = None
 OTHER = {0: (1, 2), 3: (1, 2), 1: (0, 3), 2: (0, 3)}  # FL,FR,HL,HR: diagonals FL+HR, FR+HL
 
 
@@ -65,7 +66,7 @@ class Tuck:
         self.p = dict(r=0.018, touch_off=0.05, lane=0.03, trigger=0.06, clear=0.03, lift_hip=None,
                       rel=0.03, kh=15.0, kk=20.0, knee0=0.3, margin=0.05, land_hip=0.0,
                       land_knee=-1.0, max_t=0.6, min_gap=0.0, dt=0.01, fresh=0.12, hind=1,
-                      land_rel_gain=0.0, near_gap=0.02)
+                      land_rel_gain=0.0, near_gap=0.02, push=0.0, push_knee=0.0)
         self.p.update(kw)
         self.reset()
 
@@ -129,6 +130,11 @@ class Tuck:
                 e = p["rel"] - (lx - hx)
                 a[j + 1] = np.clip(p["land_hip"] - p["land_rel_gain"] * e, -1, 1)
                 a[j + 2] = p["land_knee"]
+        if p["push"] and GATE is not None:
+            for leg in range(4):
+                if GATE.active[leg] and self.state[leg] == IDLE:
+                    a[3 * leg + 1] = p["push"]
+                    a[3 * leg + 2] = p["push_knee"]
         return a
 
     def met(self, foot, fh, blocks):
@@ -157,7 +163,9 @@ def inblk(xy, b):
 def run(policy, n, first=0, seed=7777, gate=None, env_id="NeuroCog/SuddenObstacle-v1", verbose=False):
     from neurocog_gym.locomotion.effectivity import EffectivityParams
     env = gym.make(env_id, privileged=True, effectivity=EffectivityParams(reach=REACH, swing_time=SWING))
+    global GATE
     g = Gate(env, **gate) if gate is not None else None
+    GATE = g
     u = env.unwrapped
     robot = set(int(x) for x in u.robot.robot_geoms)
     out = Counter(); rows = []
@@ -350,7 +358,10 @@ if __name__ == "__main__":
     a = ap.parse_args()
     gate = None if a.gate in (None, "none") else json.loads(a.gate)
     if a.oracle is not None:
-        from neurocog_gym.policies.oracle import OraclePolicy, OracleParams
+        if os.environ.get("O2"):
+            sys.path.insert(0, "/tmp/s23"); from oracle2 import OraclePolicy, OracleParams
+        else:
+            from neurocog_gym.policies.oracle import OraclePolicy, OracleParams
         pol = OraclePolicy(OracleParams(**json.loads(a.oracle)))
     elif a.plan is not None:
         pol = Plan(**json.loads(a.plan))

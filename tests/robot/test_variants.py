@@ -1,0 +1,114 @@
+"""Body variants (robot/variants.py): they compile, keep what they promise, and load as assets."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import pytest
+
+import neurocog_gym  # noqa: F401  (registers the envs)
+from neurocog_gym.robot import names
+from neurocog_gym.robot.variants import (
+    KINKED_LOW,
+    KINKED_PITCH,
+    kinked_shank,
+    knee_behind,
+    write_assets,
+)
+
+
+def _geom(model, name):
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)
+    assert i >= 0, f"no geom {name}"
+    return i
+
+
+def _pose(model, hip: float, knee: float) -> mujoco.MjData:
+    """Kinematics with every leg at (abduction 0, hip, knee), torso at the origin."""
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.key("home").qpos
+    for prefix in names.LEGS:
+        data.joint(f"{prefix}_hip").qpos = hip
+        data.joint(f"{prefix}_knee").qpos = knee
+        data.joint(f"{prefix}_abduct").qpos = 0.0
+    mujoco.mj_kinematics(model, data)
+    return data
+
+
+def test_kinked_shank_lower_segment_is_upright_at_its_pitch():
+    base = mujoco.MjModel.from_xml_path(str(neurocog_gym.paths.asset("scene.xml")))
+    spec = kinked_shank()
+    model = spec.compile()
+    assert model.ngeom == base.ngeom + 4
+    # hip + knee = KINKED_PITCH (body v1's home pose: hip -0.8, knee 1.6).
+    data = _pose(model, -KINKED_PITCH, 2 * KINKED_PITCH)
+    for prefix in names.LEGS:
+        low = _geom(model, f"{prefix}_shank_low")
+        up = _geom(model, f"{prefix}_shank")
+        foot = _geom(model, f"{prefix}_foot")
+        axis = data.geom_xmat[low].reshape(3, 3)[:, 2]  # a capsule's axis is its local z
+        assert abs(axis[2]) == pytest.approx(1.0, abs=1e-9)
+        assert data.geom_xpos[low][:2] == pytest.approx(data.geom_xpos[foot][:2], abs=1e-9)
+        assert model.geom_size[low][1] == pytest.approx(KINKED_LOW / 2)
+        # the mass stays the shank's, split by length; same radius and collision bits
+        body = f"{prefix}_shank"
+        assert model.body(body).mass == pytest.approx(base.body(body).mass)
+        m_up, m_low = spec.geom(f"{prefix}_shank").mass, spec.geom(f"{prefix}_shank_low").mass
+        assert m_low / (m_up + m_low) == pytest.approx(KINKED_LOW / (KINKED_LOW + 2 * model.geom_size[up][1]))
+        assert model.geom_size[low][0] == model.geom_size[up][0]
+        assert model.geom_group[low] == names.ROBOT_GEOM_GROUP
+        assert (model.geom_contype[low], model.geom_conaffinity[low]) == (
+            model.geom_contype[up],
+            model.geom_conaffinity[up],
+        )
+    # the foot and the knee do not move: the legs' kinematics are body v1's
+    data0 = _pose(base, -0.5, 1.2)
+    data1 = _pose(model, -0.5, 1.2)
+    for prefix in names.LEGS:
+        f0 = data0.geom_xpos[_geom(base, f"{prefix}_foot")]
+        f1 = data1.geom_xpos[_geom(model, f"{prefix}_foot")]
+        assert f1 == pytest.approx(f0, abs=1e-12)
+
+
+def test_kinked_shank_tilts_away_from_its_pitch():
+    model = kinked_shank(pitch=0.8).compile()
+    data = _pose(model, -0.5, 1.5)  # shank pitch 1.0: 0.2 rad past the design pitch
+    axis = data.geom_xmat[_geom(model, "FL_shank_low")].reshape(3, 3)[:, 2]
+    assert np.degrees(np.arccos(abs(axis[2]))) == pytest.approx(np.degrees(0.2), abs=1e-6)
+
+
+@pytest.mark.parametrize(("low", "pitch"), [(0.0, 0.8), (0.2, 0.8), (0.1, 1.6), (-0.1, 0.0)])
+def test_kinked_shank_rejects_bad_geometry(low, pitch):
+    with pytest.raises(ValueError, match="low must|pitch must"):
+        kinked_shank(low=low, pitch=pitch)
+
+
+def test_knee_behind_keeps_each_foot_under_its_hip():
+    model = knee_behind().compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_kinematics(model, data)
+    for prefix in names.LEGS:
+        hip = data.body(f"{prefix}_thigh").xpos
+        foot = data.geom_xpos[_geom(model, f"{prefix}_foot")]
+        assert abs(foot[0] - hip[0]) < 0.02, prefix
+        knee = data.body(f"{prefix}_shank").xpos
+        assert knee[0] < foot[0], f"{prefix}: the knee must be behind the foot"
+
+
+def test_kinked_assets_run_in_the_obstacle_env(tmp_path, monkeypatch):
+    write_assets(kinked_shank(), tmp_path / "assets")
+    monkeypatch.setenv("NEUROCOG_ASSETS", str(tmp_path / "assets"))
+    env = gym.make("NeuroCog/SuddenObstacle-v1")
+    try:
+        u = env.unwrapped
+        low = [_geom(u.model, f"{p}_shank_low") for p in names.LEGS]
+        assert set(low) <= set(int(g) for g in u.robot.robot_geoms)
+        env.reset(seed=0)
+        for _ in range(20):
+            _, _, terminated, truncated, info = env.step(np.zeros(15, np.float32))
+            assert not (terminated or truncated)
+        assert np.isfinite(info["x_position"])
+    finally:
+        env.close()
