@@ -359,7 +359,8 @@ if __name__ == "__main__":
     gate = None if a.gate in (None, "none") else json.loads(a.gate)
     if a.oracle is not None:
         if os.environ.get("O2"):
-            sys.path.insert(0, "/tmp/s23"); from oracle2 import OraclePolicy, OracleParams
+            sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+            from oracle_wait_2026_12_05 import OraclePolicy, OracleParams
         else:
             from neurocog_gym.policies.oracle import OraclePolicy, OracleParams
         pol = OraclePolicy(OracleParams(**json.loads(a.oracle)))

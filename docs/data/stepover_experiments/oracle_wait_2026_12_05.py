@@ -52,7 +52,7 @@ from neurocog_gym.policies.footing import FootingOracle
 
 IDLE, LIFT, CARRY, DROP, APPROACH, LAND, WAIT = 0, 1, 2, 3, 4, 5, 6
 import os
-LIFT_GAP = float(os.environ.get('LIFT_GAP', 0.015)); LIFT_KH = float(os.environ.get('LIFT_KH', 15)); LIFT_HIP0 = float(os.environ.get('LIFT_HIP0', 0.0)); WAIT_REACH = float(os.environ.get('WAIT_REACH', 0.10))
+LIFT_GAP = float(os.environ.get('LIFT_GAP', 0.015)); LIFT_KH = float(os.environ.get('LIFT_KH', 15)); LIFT_HIP0 = float(os.environ.get('LIFT_HIP0', 0.0)); WAIT_REACH = float(os.environ.get('WAIT_REACH', 0.10)); STEP_GAP = float(os.environ.get('STEP_GAP', 0.08))
 
 
 @dataclass(frozen=True)
@@ -164,7 +164,7 @@ class OraclePolicy:
                 lx, _ = _in_block(feet[leg, :2], b)
                 if st == APPROACH:
                     gap = -b[4] - lx - p.foot_radius
-                    st = IDLE if down else (DROP if gap <= p.drop_gap else APPROACH)
+                    st = IDLE if (down and self.held[leg] > 0.06) else (DROP if gap <= p.drop_gap else APPROACH)
                 if st == DROP:
                     if down:
                         st = IDLE
@@ -191,10 +191,14 @@ class OraclePolicy:
                 if blocks[self.block[leg], 0] == 0.0:
                     st = IDLE
                 elif cpg_swing[leg] or not down:
-                    if partner_down:
+                    bw = blocks[self.block[leg]]
+                    lxw, _ = _in_block(feet[leg, :2], bw)
+                    gapw = -bw[4] - lxw - p.foot_radius
+                    farw = bw[4] - lxw + p.foot_radius
+                    if partner_down and gapw <= STEP_GAP and farw <= p.max_over:
                         st, self.held[leg] = LIFT, 0.0
                     else:
-                        st = IDLE
+                        st, self.held[leg] = APPROACH, 0.0
             if st == IDLE and cpg_swing[leg] and partner_down:
                 k, far = self._block_met(feet[leg, :2], footholds[leg, :2], blocks)
                 if k >= 0:
