@@ -132,7 +132,7 @@ def _cmd_bench(args) -> int:
         out=args.out, scenarios=scenarios, trials=args.trials, seed=args.seed, policy=args.policy,
         attention=args.attention, max_seconds=args.max_seconds, workers=args.workers,
         ray_address=args.ray_address, resume=args.resume,
-        affordance_source=args.affordance_source,
+        affordance_source=args.affordance_source, body=args.body,
     )  # fmt: skip
     res = run_benchmark(cfg)
     for s in scenarios:
@@ -286,6 +286,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the envs' affordance_source: map (sizes from the graph alone, the "
                         "paper's) or points (the raw-point refinement); None: the env's "
                         "default (points)")  # fmt: skip
+    p.add_argument("--body", choices=("v1", "v2"), default="v1",
+                   help="the robot body of the envs: v1 (straight shanks, the registered "
+                        "default) or v2 (bent shanks, docs/body.md)")  # fmt: skip
     p.add_argument("--max-seconds", type=_positive_float, default=None,
                    help="simulated seconds per trial (None: 7 s sudden, 10 s static)")  # fmt: skip
     p.add_argument("--workers", type=_positive_int, default=None,

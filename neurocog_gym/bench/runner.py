@@ -51,6 +51,7 @@ from neurocog_gym import io
 from neurocog_gym.bench.outcome import PAPER_TABLE4, SCENARIOS, STONE_SCENARIOS, scenario_summary
 from neurocog_gym.bench.records import load_trials
 from neurocog_gym.bench.report import write_report
+from neurocog_gym.robot.model import BODIES
 
 ENV_IDS: dict[str, str] = {
     "sudden": "NeuroCog/SuddenObstacle-v1",
@@ -114,6 +115,8 @@ class BenchConfig:
     """"on": DD-GNG attention; "off": plain GNG (the ablation); "mlgng": ML-GNG (§7.1)."""
     affordance_source: str | None = None
     """The envs' ``affordance_source``: "points", "map", or None for the env's default."""
+    body: str = "v1"
+    """The robot body the envs are built with (``robot.model.BODIES``)."""
     max_seconds: float | None = None
     """Simulated seconds per trial; None: the registration's limit (sudden 7 s, static 10 s)."""
     workers: int | None = None
@@ -152,6 +155,8 @@ class BenchConfig:
                 f"affordance_source must be one of {AFFORDANCE_SOURCES} or None, "
                 f"got {self.affordance_source!r}"
             )
+        if self.body not in BODIES:
+            raise ValueError(f"body must be one of {BODIES}, got {self.body!r}")
         if self.max_seconds is not None and not (
             math.isfinite(self.max_seconds) and self.max_seconds >= CONTROL_DT
         ):
@@ -168,6 +173,7 @@ class BenchConfig:
             "run_seed": self.seed,
             "max_seconds": self.max_seconds,
             "affordance_source": self.affordance_source,
+            "body": self.body,
         }
 
 
@@ -465,6 +471,7 @@ def make_env(
     privileged: bool = False,
     affordance_source: str | None = None,
     env_kwargs: dict | None = None,
+    body: str = "v1",
 ):
     """The scenario's env with the attention setting and the trial time limit.
 
@@ -473,7 +480,7 @@ def make_env(
     oracle (:class:`neurocog_gym.policies.oracle.OraclePolicy`); ``affordance_source`` is the
     envs' keyword ("points", "map"; None: the env's default); ``env_kwargs`` are further
     ``gymnasium.make`` arguments a policy needs (``SB3Policy.env_kwargs``: the observation mode
-    of a model trained on the depth image).
+    of a model trained on the depth image); ``body`` the robot body (``robot.model.BODIES``).
     """
     import gymnasium as gym
 
@@ -483,6 +490,8 @@ def make_env(
     kwargs = {"perception": PipelineParams(gng=GNG_OF_ATTENTION[attention])}
     if affordance_source is not None:
         kwargs["affordance_source"] = affordance_source
+    if body != "v1":
+        kwargs["body"] = body
     if max_seconds is not None:
         kwargs["max_episode_steps"] = max(1, int(round(max_seconds / CONTROL_DT)))
     if privileged:
@@ -653,13 +662,14 @@ def _init_worker(
     max_seconds,
     similarity: SimilaritySettings,
     affordance_source: str | None = None,
+    body: str = "v1",
 ) -> None:
     """Build the policy once per worker; envs are built on first use, one per scenario."""
     from neurocog_gym.policies import make_policy
 
     _WORKER.clear()
     _WORKER.update(policy=make_policy(policy), attention=attention, max_seconds=max_seconds,
-                   similarity=similarity, affordance_source=affordance_source,
+                   similarity=similarity, affordance_source=affordance_source, body=body,
                    envs={})  # fmt: skip
 
 
@@ -685,6 +695,7 @@ def _worker_run(spec: TrialSpec) -> dict:
         envs[spec.scenario] = make_env(
             spec.scenario, _WORKER["attention"], _WORKER["max_seconds"], privileged,
             _WORKER["affordance_source"], getattr(_WORKER["policy"], "env_kwargs", None),
+            _WORKER["body"],
         )  # fmt: skip
     try:
         return run_trial(envs[spec.scenario], _WORKER["policy"], spec, _WORKER["similarity"])
@@ -832,7 +843,8 @@ def _check_resume(config: BenchConfig, records: list[dict]) -> None:
         return
     ident = config.identity()
     for r in records:
-        theirs = {k: r.get(k) for k in ident}
+        # runs from before the body keyword were all on body v1
+        theirs = {k: r.get(k, "v1" if k == "body" else None) for k in ident}
         if theirs != ident:
             diff = ", ".join(
                 f"{k} {theirs[k]!r} != {ident[k]!r}" for k in ident if theirs[k] != ident[k]
@@ -891,7 +903,7 @@ def run_benchmark(config: BenchConfig) -> BenchResult:
     todo = [s for s in trial_specs(config) if (s.scenario, s.index) not in done]
     skipped = len(trial_specs(config)) - len(todo)
     initargs = (policy, config.attention, config.max_seconds, config.similarity,
-                config.affordance_source)  # fmt: skip
+                config.affordance_source, config.body)  # fmt: skip
     workers = config.workers or default_workers()
     workers = max(1, min(workers, len(todo))) if todo else 0
     used = {"workers": workers}

@@ -21,7 +21,8 @@ from neurocog_gym import paths
 from neurocog_gym.envs._kernels import abs_power, clip_action_groups, fault_check
 from neurocog_gym.locomotion.gait import Gait, default_gait
 from neurocog_gym.locomotion.generator import LocomotionGenerator
-from neurocog_gym.robot.model import FAULT_WARNINGS, GRAVITY, RobotIndex
+from neurocog_gym.robot.model import FAULT_WARNINGS, GRAVITY, RobotIndex, check_body
+from neurocog_gym.robot.variants import bend_shanks
 
 N_INTERRUPT = 12
 N_PROVISION = 3
@@ -55,12 +56,14 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         width: int = 640,
         height: int = 480,
         camera_name: str | None = "follow",
+        body: str = "v1",
         **kwargs,
     ):
         EzPickle.__init__(
             self, gait, target_speed, energy_weight, reset_noise_scale, frame_skip,
-            render_mode, width, height, camera_name, **kwargs,
+            render_mode, width, height, camera_name, body=body, **kwargs,
         )  # fmt: skip
+        self.body = check_body(body)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be one of {self.metadata['render_modes']} or None, "
@@ -245,6 +248,17 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
     def _fell(self) -> bool:
         up_z = self.data.xmat[self.robot.torso_body][8]
         return bool(up_z < 0.5 or self.data.qpos[2] < 0.12)
+
+    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """The scene with this env's ``body`` (``robot.model.BODIES``; v1 is the XML as it is)."""
+        if self.body == "v1":
+            return super()._initialize_simulation()
+        spec = mujoco.MjSpec.from_file(self.fullpath)
+        bend_shanks(spec)
+        model = spec.compile()
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
+        return model, mujoco.MjData(model)
 
     def step(self, action):
         """Advance one 0.01 s control cycle (see the task's docstring for the spaces)."""

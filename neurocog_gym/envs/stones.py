@@ -216,7 +216,7 @@ class SteppingStonesEnv(ObstacleEnv):
         self._reset_pit()
 
     def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        model = build_model(self.pit_depth)
+        model = build_model(self.pit_depth, body=self.body)
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
         return model, mujoco.MjData(model)

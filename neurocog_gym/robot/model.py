@@ -31,9 +31,36 @@ def _model_xml_path(scene: str) -> str:
     return str(paths.asset(scene))
 
 
-def load_model(scene: str = paths.SCENE_XML) -> mujoco.MjModel:
-    """Compile the scene (which includes the robot) into a fresh ``MjModel``."""
-    return mujoco.MjModel.from_xml_path(_model_xml_path(scene))
+BODIES = ("v1", "v2")
+"""Robot bodies an env can be built with (the ``body`` keyword): ``"v1"``, the shipped
+``quadruped.xml`` (straight shanks); ``"v2"``, the same with bent shanks
+(``robot.variants.bend_shanks``: the lowest 10 cm of each shank stand upright above the sole;
+docs/body.md)."""
+
+
+def check_body(body: str) -> str:
+    """``body`` if it is one of :data:`BODIES`, else a ``ValueError`` naming them."""
+    if body not in BODIES:
+        raise ValueError(f"body must be one of {BODIES}, got {body!r}")
+    return body
+
+
+def scene_spec(body: str = "v1", scene: str = paths.SCENE_XML) -> mujoco.MjSpec:
+    """The scene (which includes the robot) as an ``MjSpec`` with the given body."""
+    check_body(body)
+    spec = mujoco.MjSpec.from_file(_model_xml_path(scene))
+    if body == "v2":
+        from neurocog_gym.robot.variants import bend_shanks
+
+        bend_shanks(spec)
+    return spec
+
+
+def load_model(scene: str = paths.SCENE_XML, body: str = "v1") -> mujoco.MjModel:
+    """Compile the scene (which includes the robot) with ``body`` into a fresh ``MjModel``."""
+    if check_body(body) == "v1":
+        return mujoco.MjModel.from_xml_path(_model_xml_path(scene))
+    return scene_spec(body, scene).compile()
 
 
 @dataclass(frozen=True)

@@ -26,8 +26,6 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from neurocog_gym import paths
-
 N_STONE_SLOTS = 24
 """Mocap boxes in the scene: the two platforms and up to 22 stones."""
 START, END = 0, 1
@@ -205,9 +203,14 @@ def draw_course(
     return Course(start, end, tuple(stones))
 
 
-def build_model(pit_depth: float, n_slots: int = N_STONE_SLOTS) -> mujoco.MjModel:
-    """The scene with its floor lowered to ``-pit_depth`` m and ``n_slots`` parked mocap boxes."""
-    spec = mujoco.MjSpec.from_file(str(paths.asset(paths.SCENE_XML)))
+def build_model(pit_depth: float, n_slots: int = N_STONE_SLOTS, body: str = "v1") -> mujoco.MjModel:
+    """The scene with its floor lowered to ``-pit_depth`` m and ``n_slots`` parked mocap boxes.
+
+    ``body``: the robot body (``robot.model.BODIES``).
+    """
+    from neurocog_gym.robot.model import scene_spec
+
+    spec = scene_spec(body)
     floor = spec.geom("floor")
     floor.pos = [0.0, 0.0, -float(pit_depth)]
     for k in range(n_slots):

@@ -71,7 +71,21 @@ pose (hip -0.8, knee 1.6) and its shank at the end of a stance and the start of 
 def kinked_shank(
     scene: str | Path | None = None, low: float = KINKED_LOW, pitch: float = KINKED_PITCH
 ) -> mujoco.MjSpec:
-    """The scene's spec with every shank's collision capsule bent (module docstring).
+    """The scene's spec with every shank's collision capsule bent (:func:`bend_shanks`).
+
+    Args:
+        scene: the scene XML (default: the shipped ``scene.xml``).
+        low: length of the lower, upright segment, m (:func:`bend_shanks`).
+        pitch: shank pitch at which that segment is vertical, rad (:func:`bend_shanks`).
+    """
+    spec = mujoco.MjSpec.from_file(str(scene or paths.asset(paths.SCENE_XML)))
+    return bend_shanks(spec, low, pitch)
+
+
+def bend_shanks(
+    spec: mujoco.MjSpec, low: float = KINKED_LOW, pitch: float = KINKED_PITCH
+) -> mujoco.MjSpec:
+    """Bend every shank's collision capsule in ``spec``, in place (module docstring).
 
     Each ``{leg}_shank`` capsule runs from the knee to a kink point ``low`` above the foot's
     centre along the direction that is vertical at shank pitch ``pitch``; a new capsule
@@ -80,19 +94,23 @@ def kinked_shank(
     other body are unchanged.
 
     Args:
-        scene: the scene XML (default: the shipped ``scene.xml``).
+        spec: a spec of the scene (or of the robot alone) with body v1's straight shanks.
         low: length of the lower, upright segment, m (0 < low < 0.2).
         pitch: shank pitch at which that segment is vertical, rad (|pitch| < pi / 2).
+
+    Returns:
+        ``spec``.
     """
     if not 0.0 < low < 0.2:
         raise ValueError(f"low must lie in (0, 0.2) m, got {low}")
     if not abs(pitch) < np.pi / 2:
         raise ValueError(f"pitch must lie in (-pi/2, pi/2) rad, got {pitch}")
-    spec = mujoco.MjSpec.from_file(str(scene or paths.asset(paths.SCENE_XML)))
     for prefix in names.LEGS:
         shank = spec.geom(f"{prefix}_shank")
         if shank is None:
             raise KeyError(f"the scene has no geom {prefix}_shank")
+        if spec.geom(f"{prefix}_shank_low") is not None:
+            raise ValueError(f"the shanks of this spec are bent already ({prefix}_shank_low)")
         ends = np.array(shank.fromto, dtype=np.float64)  # a copy: fromto is a view of the spec
         start, foot = ends[:3], ends[3:]
         # In the shank's frame the direction R_y(-pitch) z is world-vertical at that pitch.

@@ -1,4 +1,4 @@
-"""The figure and diagnostic scripts end to end on seeded sudden episodes (Fig. 18, the strip, first contacts)."""
+"""Figure and diagnostic scripts end to end on seeded sudden episodes (Fig. 18, strip, contacts)."""
 
 import ast
 import os

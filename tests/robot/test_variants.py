@@ -55,7 +55,8 @@ def test_kinked_shank_lower_segment_is_upright_at_its_pitch():
         body = f"{prefix}_shank"
         assert model.body(body).mass == pytest.approx(base.body(body).mass)
         m_up, m_low = spec.geom(f"{prefix}_shank").mass, spec.geom(f"{prefix}_shank_low").mass
-        assert m_low / (m_up + m_low) == pytest.approx(KINKED_LOW / (KINKED_LOW + 2 * model.geom_size[up][1]))
+        upper = 2 * model.geom_size[up][1]
+        assert m_low / (m_up + m_low) == pytest.approx(KINKED_LOW / (KINKED_LOW + upper))
         assert model.geom_size[low][0] == model.geom_size[up][0]
         assert model.geom_group[low] == names.ROBOT_GEOM_GROUP
         assert (model.geom_contype[low], model.geom_conaffinity[low]) == (
@@ -112,3 +113,79 @@ def test_kinked_assets_run_in_the_obstacle_env(tmp_path, monkeypatch):
         assert np.isfinite(info["x_position"])
     finally:
         env.close()
+
+
+# -- the body keyword (robot.model.BODIES) ------------------------------------------------------
+
+
+@pytest.mark.parametrize("env_id", neurocog_gym.ENV_IDS)
+def test_every_env_takes_the_body(env_id):
+    for body, has_low in (("v1", False), ("v2", True)):
+        env = gym.make(env_id, body=body)
+        try:
+            u = env.unwrapped
+            assert u.body == body
+            low = mujoco.mj_name2id(u.model, mujoco.mjtObj.mjOBJ_GEOM, "FL_shank_low")
+            assert (low >= 0) == has_low
+            if has_low:
+                assert low in set(int(g) for g in u.robot.robot_geoms)
+        finally:
+            env.close()
+    with pytest.raises(ValueError, match="body must be one of"):
+        gym.make(env_id, body="v3")
+
+
+def test_body_v2_is_deterministic_and_differs_from_v1():
+    def run(body):
+        env = gym.make("NeuroCog/Walk-v1", body=body)
+        env.reset(seed=3)
+        xs = []
+        for _ in range(150):
+            obs, *_ = env.step(np.zeros(15, np.float32))
+            xs.append(obs["joint_pos"].copy())
+        env.close()
+        return np.array(xs)
+
+    a, b, c = run("v2"), run("v2"), run("v1")
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)  # the shank's mass moved: the walk is not bit-identical
+
+
+def test_bend_shanks_refuses_a_bent_spec():
+    spec = kinked_shank()
+    from neurocog_gym.robot.variants import bend_shanks
+
+    with pytest.raises(ValueError, match="bent already"):
+        bend_shanks(spec)
+
+
+def test_bench_takes_the_body(monkeypatch):
+    from neurocog_gym import cli
+    from neurocog_gym.bench import runner
+
+    env = runner.make_env("sudden", "on", 0.1, body="v2")
+    assert env.unwrapped.body == "v2"
+    env.close()
+    with pytest.raises(ValueError, match="body must be one of"):
+        runner.BenchConfig(out="x", body="v3")
+    cfg = runner.BenchConfig(out="x", body="v2")
+    assert cfg.identity()["body"] == "v2"
+    seen = {}
+
+    def fake_run(cfg):
+        seen["cfg"] = cfg
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(runner, "run_benchmark", fake_run)
+    rc = cli.main(["bench", "--scenario", "sudden", "--body", "v2", "--out", "unused"])
+    assert rc == 2 and seen["cfg"].body == "v2"
+
+
+def test_resume_reads_records_without_a_body_as_v1(tmp_path):
+    from neurocog_gym.bench import runner
+
+    cfg = runner.BenchConfig(out=tmp_path, resume=True)
+    old = {k: v for k, v in cfg.identity().items() if k != "body"}
+    runner._check_resume(cfg, [old])  # a run from before the keyword: body v1
+    with pytest.raises(ValueError, match="body"):
+        runner._check_resume(runner.BenchConfig(out=tmp_path, resume=True, body="v2"), [old])
