@@ -35,7 +35,7 @@ neuron A to neuron B, positive in Eq. 5; HF/HE hip flexor/extensor, KF/KE knee f
 
 Numeric values (body v1, issue 21): the structure above is the v0 design, unchanged. The numbers
 of ``TrotDesign`` (synapses, tau_f, k_rest, theta_dd_MAX, posture) were found again on the v1 body
-by a single-process local random search on ``NeuroCog/Walk-v1`` (zero action, 2-3 seeds of 8 s,
+by a single-process local random search on ``NeuroCog/Walk-v2`` (zero action, 2-3 seeds of 8 s,
 the first 2 s left out, one or two numbers perturbed by 6 % at a time and kept when better),
 starting from the v0 numbers scaled to the longer legs (theta_dd_MAX x 0.55, tau_f x 1.3, knee
 synapses x 0.7, posture hip -0.8 / knee 1.6). Its cost: speed error to 0.5 m/s; every leg's

@@ -1,6 +1,6 @@
 """A picture strip of the AEF (or the shipped PPO policy) on a sudden block.
 
-One seeded ``NeuroCog/SuddenObstacle-v1`` episode under ``--policy aef`` (the fit and the AEF
+One seeded ``NeuroCog/SuddenObstacle-v2`` episode under ``--policy aef`` (the fit and the AEF
 network on the observation; its stop / side-step / pass comes from the fit's provision teacher,
 ``locomotion/avoidance.py``), rendered with
 the attention graph, facets and footholds drawn in; four frames side by side: trotting just
@@ -44,7 +44,7 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     policy = make_policy(args.policy)
     env = gym.make(
-        "NeuroCog/SuddenObstacle-v1",
+        "NeuroCog/SuddenObstacle-v2",
         render_mode="rgb_array",
         width=args.width,
         height=args.height,

@@ -54,10 +54,10 @@ from neurocog_gym.bench.report import write_report
 from neurocog_gym.robot.model import BODIES
 
 ENV_IDS: dict[str, str] = {
-    "sudden": "NeuroCog/SuddenObstacle-v1",
-    "static": "NeuroCog/StaticObstacle-v1",
-    "stones": "NeuroCog/SteppingStones-v1",
-    "stones-moving": "NeuroCog/SteppingStones-v1",
+    "sudden": "NeuroCog/SuddenObstacle-v2",
+    "static": "NeuroCog/StaticObstacle-v2",
+    "stones": "NeuroCog/SteppingStones-v2",
+    "stones-moving": "NeuroCog/SteppingStones-v2",
 }
 SCENARIO_KWARGS: dict[str, dict] = {"stones-moving": {"moving": True}}
 """``gymnasium.make`` arguments of a scenario beyond its id."""
@@ -115,8 +115,8 @@ class BenchConfig:
     """"on": DD-GNG attention; "off": plain GNG (the ablation); "mlgng": ML-GNG (§7.1)."""
     affordance_source: str | None = None
     """The envs' ``affordance_source``: "points", "map", or None for the env's default."""
-    body: str = "v1"
-    """The robot body the envs are built with (``robot.model.BODIES``)."""
+    body: str = "v2"
+    """The robot body the envs are built with (``robot.model.BODIES``; the -v2 envs' v2)."""
     max_seconds: float | None = None
     """Simulated seconds per trial; None: the registration's limit (sudden 7 s, static 10 s)."""
     workers: int | None = None
@@ -471,7 +471,7 @@ def make_env(
     privileged: bool = False,
     affordance_source: str | None = None,
     env_kwargs: dict | None = None,
-    body: str = "v1",
+    body: str = "v2",
 ):
     """The scenario's env with the attention setting and the trial time limit.
 
@@ -490,7 +490,7 @@ def make_env(
     kwargs = {"perception": PipelineParams(gng=GNG_OF_ATTENTION[attention])}
     if affordance_source is not None:
         kwargs["affordance_source"] = affordance_source
-    if body != "v1":
+    if body != "v2":
         kwargs["body"] = body
     if max_seconds is not None:
         kwargs["max_episode_steps"] = max(1, int(round(max_seconds / CONTROL_DT)))
@@ -662,7 +662,7 @@ def _init_worker(
     max_seconds,
     similarity: SimilaritySettings,
     affordance_source: str | None = None,
-    body: str = "v1",
+    body: str = "v2",
 ) -> None:
     """Build the policy once per worker; envs are built on first use, one per scenario."""
     from neurocog_gym.policies import make_policy

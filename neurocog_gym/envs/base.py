@@ -56,7 +56,7 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         width: int = 640,
         height: int = 480,
         camera_name: str | None = "follow",
-        body: str = "v1",
+        body: str = "v2",
         **kwargs,
     ):
         EzPickle.__init__(
@@ -250,7 +250,10 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         return bool(up_z < 0.5 or self.data.qpos[2] < 0.12)
 
     def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        """The scene with this env's ``body`` (``robot.model.BODIES``; v1 is the XML as it is)."""
+        """The scene with this env's ``body`` (``robot.model.BODIES``).
+
+        v1 is the XML as it is; v2 bends its shanks (``robot.variants.bend_shanks``).
+        """
         if self.body == "v1":
             return super()._initialize_simulation()
         spec = mujoco.MjSpec.from_file(self.fullpath)

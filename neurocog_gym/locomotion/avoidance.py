@@ -37,7 +37,7 @@ walk-round rule):
 
   Until issue 22's walk-round work (2026-12-05) the side step marched in place (``k_side`` 1,
   ``k_min`` 1) without the lean. Marching in place, a side step walks the body back at
-  0.15 m/s and turns it towards the step at 20 deg/s (Walk-v1, s_COR 1), more than the heading
+  0.15 m/s and turns it towards the step at 20 deg/s (Walk-v2, s_COR 1), more than the heading
   feedback held (s_DIR 1 turns 24 deg/s): the yaw ran to 20-70 deg, the tilted body's lanes
   kept overlapping the box, and three sudden trials in four ran out of time. At a quarter
   stride with the lean the same side step goes 0.19 m/s sideways, 0.02-0.06 m/s ahead, and

@@ -37,7 +37,7 @@ the network's: 54).
 Heading hold (s_DIR against the heading error) and slowing for an uncleared box were tried and
 dropped: with the provision's 0.5 s low-pass, heading feedback swung the yaw by 20-30 deg and
 the trot fell in 6-9 of 40; a side step that ends abruptly (s_COR 1 -> 0) or dwells at
-0.2-0.5 fell as often (Walk-v1, constant s_COR 0.2-0.5 for 6.5 s: 1-3 falls in 10; 0.7 and 1:
+0.2-0.5 fell as often (Walk-v2, constant s_COR 0.2-0.5 for 6.5 s: 1-3 falls in 10; 0.7 and 1:
 none).
 
 The fit keeps state across an episode (the teacher's state, the boxes it has seen, its heading):

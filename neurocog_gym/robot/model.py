@@ -32,10 +32,10 @@ def _model_xml_path(scene: str) -> str:
 
 
 BODIES = ("v1", "v2")
-"""Robot bodies an env can be built with (the ``body`` keyword): ``"v1"``, the shipped
-``quadruped.xml`` (straight shanks); ``"v2"``, the same with bent shanks
-(``robot.variants.bend_shanks``: the lowest 10 cm of each shank stand upright above the sole;
-docs/body.md)."""
+"""Robot bodies an env can be built with (the ``body`` keyword): ``"v2"``, the envs' default
+since the -v2 ids, is ``quadruped.xml`` with bent shanks (``robot.variants.bend_shanks``: the
+lowest 10 cm of each shank stand upright above the sole; docs/body_v2.md); ``"v1"`` is
+``quadruped.xml`` as it is (straight shanks: the -v1 envs' body)."""
 
 
 def check_body(body: str) -> str:
@@ -57,7 +57,13 @@ def scene_spec(body: str = "v1", scene: str = paths.SCENE_XML) -> mujoco.MjSpec:
 
 
 def load_model(scene: str = paths.SCENE_XML, body: str = "v1") -> mujoco.MjModel:
-    """Compile the scene (which includes the robot) with ``body`` into a fresh ``MjModel``."""
+    """Compile the scene (which includes the robot) with ``body`` into a fresh ``MjModel``.
+
+    The default is the XML as written (body v1), which the training code keeps: the shipped
+    AEF weights were babbled and the gait tuned on it, and the two bodies share their joints,
+    kinematics and masses (v2 only bends the shanks' collision capsules). The envs default to
+    body v2 (their ``body`` keyword).
+    """
     if check_body(body) == "v1":
         return mujoco.MjModel.from_xml_path(_model_xml_path(scene))
     return scene_spec(body, scene).compile()

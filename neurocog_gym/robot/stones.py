@@ -124,7 +124,7 @@ class CourseParams:
     """How a course is drawn (:func:`draw_course`); every range uniform, bounds inclusive.
 
     The robot's feet stand on two tracks about 24 cm apart (home pose: y = ±0.12 m) and a foot
-    lands every ~25 cm along its track in the nominal trot (measured on Walk-v1: 0.44 m/s, each
+    lands every ~25 cm along its track in the nominal trot (measured on Walk-v2: 0.44 m/s, each
     foot's touchdowns 0.24-0.26 m apart, a hind foot 3-4 cm behind the front foot's print). Issue
     26 gives the stones' size (12-25 cm across); the rest is designed from the gait: one row of
     stones under each track; gaps from a sole's width and a half (a foot can drop into it) to

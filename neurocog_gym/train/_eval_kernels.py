@@ -7,7 +7,7 @@ model); fused here it is a few microseconds.
 
 With the walking provision and the interrupt at zero the generator's drive is
 ``g_flex * y_flexor - g_ext * y_extensor`` (the provision scales are exactly 1 and the coronal
-term exactly 0), so these kernels reproduce ``NeuroCog/Walk-v1`` bit for bit (the evaluator's
+term exactly 0), so these kernels reproduce ``NeuroCog/Walk-v2`` bit for bit (the evaluator's
 test checks that against the env) as long as the CPG stays bounded.
 """
 

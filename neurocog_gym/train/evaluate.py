@@ -2,7 +2,7 @@
 
 The evaluator steps the MuJoCo model with the :class:`LocomotionGenerator`'s state and kernels
 directly (one fused numba call per cycle, ``_eval_kernels.py``) — no perception, no Gymnasium
-wrappers — and reproduces ``NeuroCog/Walk-v1`` with an all-zero action step for step: same scene,
+wrappers — and reproduces ``NeuroCog/Walk-v2`` with an all-zero action step for step: same scene,
 same reset (the ``home`` keyframe plus uniform joint noise, then the CPG's trot-phase start with
 its own noise, both drawn from ``numpy.random.default_rng(seed)`` in the env's order), same fall
 and physics-fault tests. The one difference: a diverging CPG ends the rollout (below), where the
@@ -72,6 +72,8 @@ class EvalParams:
     cpg_bound: float = 1e3
     """|x_i| beyond which the CPG counts as diverged, dimensionless (our choice; a working
     Matsuoka network with u0 = 1 stays within a few units)."""
+    body: str = "v2"
+    """The robot body of the rollout (``robot.model.BODIES``; the envs' default)."""
 
     def __post_init__(self):
         for name in ("seconds", "dt", "target_speed", "min_speed"):
@@ -145,7 +147,7 @@ class GaitEvaluator:
                 "so its scores would not be the env's: tune with vestibular_gain 0"
             )
         self.params = p = params or EvalParams()
-        self.model = load_model()
+        self.model = load_model(body=p.body)
         self.data = mujoco.MjData(self.model)
         self.robot = RobotIndex.build(self.model)
         frame_skip = p.dt / self.model.opt.timestep

@@ -135,7 +135,8 @@ class NSGAConfig:
         """Inverse of :meth:`to_json`."""
         names = {f.name for f in fields(cls)}
         kw = {k: v for k, v in raw.items() if k in names and k != "eval"}
-        return cls(**kw, eval=EvalParams(**raw.get("eval", {})))
+        # a config from before EvalParams.body was evaluated on body v1
+        return cls(**kw, eval=EvalParams(**{"body": "v1", **raw.get("eval", {})}))
 
 
 # -- the pymoo problem ---------------------------------------------------------------------------

@@ -112,7 +112,7 @@ def test_sb3_policy_explicit_statistics(saved, tmp_path):
         SB3Policy(out / "model.zip", vecnormalize=tmp_path / "bad.pkl")
 
 
-def test_shipped_ppo_policy_says_it_needs_retraining_on_v1(capsys, tmp_path):
+def test_shipped_ppo_policy_says_it_needs_retraining(capsys, tmp_path):
     """The shipped model was trained on SuddenObstacle-v0 (another body, 2-D observation keys):
     ``make_policy("ppo")`` and ``--policy ppo`` stop with one line that says so, instead of an
     observation-shape error from deep inside stable-baselines3 at the first step."""
@@ -123,7 +123,7 @@ def test_shipped_ppo_policy_says_it_needs_retraining_on_v1(capsys, tmp_path):
     assert shipped_ppo_env() == "NeuroCog/SuddenObstacle-v0"
     assert shipped_ppo_env() not in neurocog_gym.ENV_IDS
     with pytest.raises(
-        ValueError, match=r"trained on the v0 envs .* retrained on .*-v1 \(issue 24\)"
+        ValueError, match=r"trained on the v0 envs .* retrained on .*-v2 \(issue 24\)"
     ):
         make_policy("ppo")
     assert cli.main(["bench", "--policy", "ppo", "--trials", "1", "--workers", "1",

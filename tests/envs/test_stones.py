@@ -1,4 +1,4 @@
-"""NeuroCog/SteppingStones-v1 (neurocog_gym/envs/stones.py, robot/stones.py): course, outcome,
+"""NeuroCog/SteppingStones-v2 (neurocog_gym/envs/stones.py, robot/stones.py): course, outcome,
 observation, determinism, errors, benchmark scenarios.
 
 The registered id also runs through the parametrized checks of test_conformance.py,
@@ -24,7 +24,7 @@ from neurocog_gym.robot.stones import (
     draw_course,
 )
 
-STONES = "NeuroCog/SteppingStones-v1"
+STONES = "NeuroCog/SteppingStones-v2"
 ZERO = np.zeros(15, np.float32)
 # Rows of touching 25 cm stones under both tracks: no gap anywhere, the blind trot crosses.
 GAPLESS = CourseParams(gap=(0.0, 0.0), lateral=0.0, stone_size=(0.25, 0.25))
@@ -75,7 +75,7 @@ def test_sb3_check_env_is_silent(kwargs, check_env_silently):
 
 def test_observation_keys_are_the_obstacle_envs_plus_support():
     stones = gym.make(STONES, privileged=True)
-    static = gym.make("NeuroCog/StaticObstacle-v1", privileged=True)
+    static = gym.make("NeuroCog/StaticObstacle-v2", privileged=True)
     s, o = set(stones.observation_space.spaces), set(static.observation_space.spaces)
     assert s - o == {"foothold_supported", "true_stones"} and o <= s
     assert stones.action_space == static.action_space

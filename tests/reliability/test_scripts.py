@@ -17,7 +17,7 @@ def _script(name, *args, timeout=300):
 
 def test_soak_script_and_report(tmp_path):
     js = tmp_path / "walk.json"
-    _script("soak.py", "--env", "NeuroCog/Walk-v1", "--steps", "1500", "--warmup", "500",
+    _script("soak.py", "--env", "NeuroCog/Walk-v2", "--steps", "1500", "--warmup", "500",
             "--sample-every", "250", "--episode-steps", "400", "--json", js)  # fmt: skip
     r = json.loads(js.read_text())
     assert r["steps"] == 1500 and r["episodes"] >= 4 and r["nonfinite_obs_steps"] == 0
@@ -25,7 +25,7 @@ def test_soak_script_and_report(tmp_path):
     md = tmp_path / "soak.md"
     _script("soak.py", "--report", js, "--out", md)
     text = md.read_text()
-    assert "| NeuroCog/Walk-v1 | 1,500 (1,500) |" in text and "growth" in text
+    assert "| NeuroCog/Walk-v2 | 1,500 (1,500) |" in text and "growth" in text
 
 
 def test_search_gait_script_scores_and_writes_only_improvements(tmp_path):

@@ -101,7 +101,9 @@ def test_knee_behind_keeps_each_foot_under_its_hip():
 def test_kinked_assets_run_in_the_obstacle_env(tmp_path, monkeypatch):
     write_assets(kinked_shank(), tmp_path / "assets")
     monkeypatch.setenv("NEUROCOG_ASSETS", str(tmp_path / "assets"))
-    env = gym.make("NeuroCog/SuddenObstacle-v1")
+    with pytest.raises(ValueError, match="bent already"):  # body v2 bends the scene's shanks
+        gym.make("NeuroCog/SuddenObstacle-v2")
+    env = gym.make("NeuroCog/SuddenObstacle-v2", body="v1")  # the scene as written: bent
     try:
         u = env.unwrapped
         low = [_geom(u.model, f"{p}_shank_low") for p in names.LEGS]
@@ -137,7 +139,7 @@ def test_every_env_takes_the_body(env_id):
 
 def test_body_v2_is_deterministic_and_differs_from_v1():
     def run(body):
-        env = gym.make("NeuroCog/Walk-v1", body=body)
+        env = gym.make("NeuroCog/Walk-v2", body=body)
         env.reset(seed=3)
         xs = []
         for _ in range(150):
@@ -184,8 +186,20 @@ def test_bench_takes_the_body(monkeypatch):
 def test_resume_reads_records_without_a_body_as_v1(tmp_path):
     from neurocog_gym.bench import runner
 
-    cfg = runner.BenchConfig(out=tmp_path, resume=True)
+    cfg = runner.BenchConfig(out=tmp_path, resume=True, body="v1")
     old = {k: v for k, v in cfg.identity().items() if k != "body"}
     runner._check_resume(cfg, [old])  # a run from before the keyword: body v1
     with pytest.raises(ValueError, match="body"):
-        runner._check_resume(runner.BenchConfig(out=tmp_path, resume=True, body="v2"), [old])
+        runner._check_resume(runner.BenchConfig(out=tmp_path, resume=True), [old])  # v2
+
+
+def test_nsga_configs_from_before_the_body_resume_on_v1():
+    from neurocog_gym.train.evaluate import EvalParams
+    from neurocog_gym.train.nsga import NSGAConfig
+
+    cfg = NSGAConfig(pop_size=4, generations=1, eval=EvalParams(seconds=0.2))
+    assert cfg.eval.body == "v2"
+    raw = cfg.to_json()
+    assert NSGAConfig.from_json(raw).eval.body == "v2"
+    del raw["eval"]["body"]
+    assert NSGAConfig.from_json(raw).eval.body == "v1"
