@@ -359,6 +359,8 @@ if __name__ == "__main__":
     gate = None if a.gate in (None, "none") else json.loads(a.gate)
     if a.oracle is not None:
         if os.environ.get("O2"):
+            # the wait variant: oracle_wait_2026_12_05.patch applied to a copy of
+            # neurocog_gym/policies/oracle.py saved as oracle_wait_2026_12_05.py beside this file
             sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
             from oracle_wait_2026_12_05 import OraclePolicy, OracleParams
         else:
