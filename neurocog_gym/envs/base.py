@@ -249,16 +249,21 @@ class QuadrupedEnv(MujocoEnv, EzPickle):
         up_z = self.data.xmat[self.robot.torso_body][8]
         return bool(up_z < 0.5 or self.data.qpos[2] < 0.12)
 
-    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    def _build_model(self) -> mujoco.MjModel:
         """The scene with this env's ``body`` (``robot.model.BODIES``).
 
-        v1 is the XML as it is; v2 bends its shanks (``robot.variants.bend_shanks``).
+        v1 is the XML as it is; v2 bends its shanks (``robot.variants.bend_shanks``). Tasks with
+        their own scene override this.
         """
         if self.body == "v1":
-            return super()._initialize_simulation()
+            return mujoco.MjModel.from_xml_path(self.fullpath)
         spec = mujoco.MjSpec.from_file(self.fullpath)
         bend_shanks(spec)
-        model = spec.compile()
+        return spec.compile()
+
+    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """:meth:`_build_model`, with the offscreen buffer grown to the render size."""
+        model = self._build_model()
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
         return model, mujoco.MjData(model)

@@ -215,11 +215,9 @@ class SteppingStonesEnv(ObstacleEnv):
         self._level = 0.0
         self._reset_pit()
 
-    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        model = build_model(self.pit_depth, body=self.body)
-        model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
-        model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
-        return model, mujoco.MjData(model)
+    def _build_model(self) -> mujoco.MjModel:
+        """The stones scene (``robot.stones.build_model``) with this env's body."""
+        return build_model(self.pit_depth, body=self.body)
 
     # -- spaces -------------------------------------------------------------------------------
 
