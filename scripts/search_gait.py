@@ -14,8 +14,9 @@ Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers mult
 * with ``--mismatch W``: W x the share of time a foot's contact disagrees with its CPG phase
   (in the air while the CPG stands it, or down while it swings); with ``--swing S``: 30
   (``--swing_weight``) per second
-  by which the median swing is shorter than S; with ``--hip_height H``: 100 per metre by which
-  the mean hip height falls short of H (all three used for body v2, off by default); with
+  by which the median swing is shorter than S; with ``--hip_height H``: 100 (``--hip_weight``)
+  per metre by which the mean hip height falls short of H (all three used for body v2, off by
+  default); with
   ``--perturb K`` every other seed walks with every K-th front swing a high step.
 
 Body v1's numbers came from four chained runs of this search (about 1,100 candidates): from the
@@ -91,7 +92,10 @@ class Args:
     """The disturbances of ``--perturb``, in turn: h high step, d shortened step, o step over
     (``walk_stats``); O the step over with a 0.16 s carry."""
     hip_height: float = 0.0
-    """Lowest wanted mean hip height while walking, m; 100 per metre below it (0: not used)."""
+    """Lowest wanted mean hip height while walking, m; ``--hip_weight`` per metre below it (0: not
+    used)."""
+    hip_weight: float = 100.0
+    """Cost per metre by which the mean hip height falls short of ``--hip_height``."""
     cma: bool = False
     """Search with CMA-ES (the ``cma`` package) instead: ``--iters`` evaluations in all, the
     numbers moved relatively (``--sigma``), near-zero ones absolutely."""
@@ -247,6 +251,7 @@ def cost(
     support: float = 0.0,
     short_weight: float = 0.3,
     liftoff: bool = False,
+    hip_weight: float = 100.0,
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
@@ -262,7 +267,7 @@ def cost(
             c += 50 * max(0.0, top - 0.058)
         c += abs(s["drift"]) / 6.0 + 20.0 * s["side"] + short_weight * s["short"]
         c += mismatch * s["mismatch"] + swing_weight * max(0.0, swing - s["swing"])
-        c += 100.0 * max(0.0, hip_height - s["hip_height"])
+        c += hip_weight * max(0.0, hip_height - s["hip_height"])
         c += support * s["under3"]
         if support:  # a walk may not buy its support by dragging a pair of feet
             c += sum(1000.0 * max(0.0, 0.02 - med) for med in s["clear"])
@@ -328,7 +333,8 @@ def main(argv: list[str] | None = None) -> None:
              "hip_height": args.hip_height, "speed": args.speed,
              "swing_weight": args.swing_weight, "perturb": args.perturb,
              "kinds": args.kinds, "support": args.support,
-             "short_weight": args.short_weight, "liftoff": args.liftoff}  # fmt: skip
+             "short_weight": args.short_weight, "liftoff": args.liftoff,
+             "hip_weight": args.hip_weight}  # fmt: skip
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
