@@ -9,7 +9,8 @@ Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers mult
 * per leg: the median swing clearance below 3.2 cm or above 4.8 cm (per cm), half the amount by
   which its highest swing exceeds 5.8 cm;
 * |lateral drift| / 6 m;
-* 20 x the share of time both feet of one side are off the ground (a pace-like gait);
+* 20 (``--side_weight``) x the share of time both feet of one side are off the ground (a
+  pace-like gait);
 * 0.3 (``--short_weight``) x short touch-downs (contacts under 80 ms) per second;
 * with ``--mismatch W``: W x the share of time a foot's contact disagrees with its CPG phase
   (in the air while the CPG stands it, or down while it swings); with ``--swing S``: 30
@@ -105,6 +106,11 @@ class Args:
     """``--perturb``'s disturbances start at the foot's lift-off, not at the CPG's swing onset."""
     short_weight: float = 0.3
     """Cost per short touch-down (a contact under 80 ms) per second."""
+    fixed: str = ""
+    """Comma-separated ``TrotDesign`` fields the search leaves at the start's values (e.g.
+    ``ph,pk``: the front posture, on which the bent shank's geometry depends)."""
+    side_weight: float = 20.0
+    """Cost per unit share of time with both feet of one side off the ground (pace-like)."""
     support: float = 0.0
     """Weight of the share of time with fewer than three soles on the ground (sole below
     4 mm), for a walk (0: not used)."""
@@ -252,6 +258,7 @@ def cost(
     short_weight: float = 0.3,
     liftoff: bool = False,
     hip_weight: float = 100.0,
+    side_weight: float = 20.0,
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
@@ -265,7 +272,7 @@ def cost(
         for med, top in zip(s["clear"], s["top"], strict=True):
             c += 100 * max(0.0, 0.032 - med) + 100 * max(0.0, med - 0.048)
             c += 50 * max(0.0, top - 0.058)
-        c += abs(s["drift"]) / 6.0 + 20.0 * s["side"] + short_weight * s["short"]
+        c += abs(s["drift"]) / 6.0 + side_weight * s["side"] + short_weight * s["short"]
         c += mismatch * s["mismatch"] + swing_weight * max(0.0, swing - s["swing"])
         c += hip_weight * max(0.0, hip_height - s["hip_height"])
         c += support * s["under3"]
@@ -334,12 +341,16 @@ def main(argv: list[str] | None = None) -> None:
              "swing_weight": args.swing_weight, "perturb": args.perturb,
              "kinds": args.kinds, "support": args.support,
              "short_weight": args.short_weight, "liftoff": args.liftoff,
-             "hip_weight": args.hip_weight}  # fmt: skip
+             "hip_weight": args.hip_weight, "side_weight": args.side_weight}  # fmt: skip
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
 
     keys = KEYS + (WALK_GENE_KEYS if best.walk else GENE_KEYS) if args.genes else KEYS
+    fixed = {k for k in args.fixed.split(",") if k}
+    if fixed - set(keys):
+        parser.error(f"--fixed names fields the search does not move: {sorted(fixed - set(keys))}")
+    keys = tuple(k for k in keys if k not in fixed)
     if args.cma:
         _cma_search(args, best, keys, extra)
         return

@@ -38,6 +38,20 @@ def test_search_gait_script_scores_and_writes_only_improvements(tmp_path):
     assert out.exists() == (res.stdout.count("cost") > 1)
 
 
+def test_search_gait_fixed_leaves_those_fields_and_rejects_unknown_ones(tmp_path):
+    out = tmp_path / "best.json"
+    args = ("--cma", "--iters", "4", "--seeds", "1", "--seconds", "2.5", "--out", out)
+    _script("search_gait.py", *args, "--fixed", "ph,pk,tf", "--sigma", "0.3")
+    if out.exists():  # a candidate beat the start: the fixed fields are the start's
+        best = json.loads(out.read_text())
+        assert (best["ph"], best["pk"], best["tf"]) == (-0.8963, 1.4801, 0.5960)
+    bad = subprocess.run([sys.executable, str(ROOT / "scripts" / "search_gait.py"), "--fixed",
+                          "no_such_field", "--iters", "0", "--out", str(out)],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT)  # fmt: skip
+    assert bad.returncode != 0
+    assert "no_such_field" in bad.stderr
+
+
 def test_body_figures_script_writes_the_body_page(tmp_path):
     out = tmp_path / "body.md"
     _script("body_figures.py", "--seeds", "1", "--swings", "1", "--phases", "2", "--out", out)
