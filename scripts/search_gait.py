@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import inspect
 import json
 import sys
 from pathlib import Path
@@ -289,7 +290,7 @@ def _cma_cost(job) -> float:
         return 1e4
 
 
-def _cma_search(args: Args, start: TrotDesign, keys, extra: dict) -> None:
+def _cma_search(args: Args, start: TrotDesign, start_cost: float, keys, extra: dict) -> None:
     """CMA-ES over ``keys`` around ``start``; the best design is written after each generation."""
     from concurrent.futures import ProcessPoolExecutor
 
@@ -306,8 +307,7 @@ def _cma_search(args: Args, start: TrotDesign, keys, extra: dict) -> None:
 
     es = cma.CMAEvolutionStrategy(np.zeros(len(keys)), args.sigma,
                                   {"seed": args.rng + 1, "verbose": -9})  # fmt: skip
-    best, best_cost, n = start, cost(start, args.seeds, args.seconds, **extra), 0
-    print(f"start: cost {best_cost:.3f}", flush=True)
+    best, best_cost, n = start, start_cost, 0
     with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
         while n < args.iters and not es.stop():
             xs = es.ask()
@@ -320,6 +320,19 @@ def _cma_search(args: Args, start: TrotDesign, keys, extra: dict) -> None:
                 best, best_cost = jobs[k][0], costs[k]
                 nio.atomic_write_text(args.out, json.dumps(dataclasses.asdict(best), indent=1))
             print(f"{n}: generation best {min(costs):.3f}, best {best_cost:.3f}", flush=True)
+
+
+def search_keys(start: TrotDesign, genes: bool, fixed: str) -> tuple[str, ...]:
+    """The ``TrotDesign`` fields a search moves: ``KEYS``, with ``genes`` the CPG weights of the
+    start's structure too, less the comma-separated ``fixed`` ones (ValueError for a name the
+    search would not move anyway)."""
+    keys = KEYS + (WALK_GENE_KEYS if start.walk else GENE_KEYS) if genes else KEYS
+    names = {k for k in fixed.split(",") if k}
+    if names - set(keys):
+        raise ValueError(
+            f"--fixed names fields the search does not move: {sorted(names - set(keys))}"
+        )
+    return tuple(k for k in keys if k not in names)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -335,24 +348,19 @@ def main(argv: list[str] | None = None) -> None:
     best = TrotDesign()
     if args.start:
         best = dataclasses.replace(best, **json.loads(Path(args.start).read_text()))
+    try:
+        keys = search_keys(best, args.genes, args.fixed)
+    except ValueError as e:
+        parser.error(str(e))
     rng = np.random.default_rng(args.rng)
-    extra = {"mismatch": args.mismatch, "swing": args.swing, "speed_weight": args.speed_weight,
-             "hip_height": args.hip_height, "speed": args.speed,
-             "swing_weight": args.swing_weight, "perturb": args.perturb,
-             "kinds": args.kinds, "support": args.support,
-             "short_weight": args.short_weight, "liftoff": args.liftoff,
-             "hip_weight": args.hip_weight, "side_weight": args.side_weight}  # fmt: skip
+    # Every keyword of cost() past the first three is the Args field of the same name.
+    extra = {k: getattr(args, k) for k in list(inspect.signature(cost).parameters)[3:]}
     best_cost = cost(best, args.seeds, args.seconds, **extra)
     print(f"start: cost {best_cost:.3f}", flush=True)
     from neurocog_gym import io as nio
 
-    keys = KEYS + (WALK_GENE_KEYS if best.walk else GENE_KEYS) if args.genes else KEYS
-    fixed = {k for k in args.fixed.split(",") if k}
-    if fixed - set(keys):
-        parser.error(f"--fixed names fields the search does not move: {sorted(fixed - set(keys))}")
-    keys = tuple(k for k in keys if k not in fixed)
     if args.cma:
-        _cma_search(args, best, keys, extra)
+        _cma_search(args, best, best_cost, keys, extra)
         return
     for it in range(args.iters):
         changes = {}
