@@ -91,6 +91,8 @@ class Args:
     and HR instead of only the right legs)."""
     hold_hip: float = 0.0
     """Hip interrupt of the HL leg meanwhile (with ``hold_knee``)."""
+    hold_legs: str = "2"
+    """Legs the hold applies to, comma-separated indices (0 FL, 1 FR, 2 HL, 3 HR; default HL)."""
     hold_from: float = 0.15
     """Seconds after FL's lift-off from which the HL hold applies."""
     any_lift: bool = False
@@ -168,7 +170,8 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
             act[[3, 6, 9]] = a.shift
             act[0] = a.shift_fl
         if (a.hold_knee or a.hold_hip) and t >= a.hold_from and (state or t < t_path):
-            act[7], act[8] = a.hold_hip, a.hold_knee
+            for leg in (int(v) for v in a.hold_legs.split(",")):
+                act[3 * leg + 1], act[3 * leg + 2] = a.hold_hip, a.hold_knee
         if a.primitive == "interrupt" and state:
             if state == 1:
                 act[1], act[2] = 0.3, 1.0
@@ -267,6 +270,14 @@ def main(argv: list[str] | None = None) -> None:
         parser.error(f"--primitive must be 'interrupt' or 'box', got {a.primitive!r}")
     if a.seeds < 1:
         parser.error("--seeds must be >= 1")
+    try:
+        legs = [int(v) for v in a.hold_legs.split(",")]
+    except ValueError:
+        legs = [-1]
+    if not legs or any(leg not in (0, 1, 2, 3) for leg in legs):
+        parser.error(
+            f"--hold_legs must be leg indices 0-3 separated by commas, got {a.hold_legs!r}"
+        )
     _prepare_body(a)
     import neurocog_gym  # noqa: F401  (registers the env ids, after the assets are chosen)
 
