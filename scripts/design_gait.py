@@ -88,6 +88,9 @@ class TrotDesign:
     """Damping ratio of the pools' restoring term (d_rest = 2 zeta sqrt(k_rest))."""
     am: float = 104.5131
     """theta_dd_MAX, rad/s^2 (Eq. 8)."""
+    vm: float = 6.6
+    """theta_dot_MAX, rad/s (Eq. 10): the servo's no-load speed (6.6: the shipped MX-64; a
+    faster servo, ``robot.variants.servo_speed``, needs its figure here)."""
     ph: float = -0.8963
     """Front hip posture, rad."""
     pk: float = 1.4801
@@ -168,6 +171,7 @@ def build(p: TrotDesign) -> Gait:
         ),
         tau_f=p.tf,
         acc_max=p.am,
+        vel_max=p.vm,
         k_rest=p.kr,
         d_rest=2.0 * p.zeta * float(np.sqrt(p.kr)),
         name="hand-designed walk" if p.walk else "hand-designed trot",

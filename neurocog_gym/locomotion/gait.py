@@ -10,6 +10,9 @@ replacement for ``assets/default_gait.json``. Fields:
 * ``tau_f``: the CPG frequency scale (Table 3's tau_f).
 * ``acc_max``, ``k_rest``, ``d_rest``: the motor-neuron pools' theta_dd_MAX (Eq. 8, "chosen
   through preliminary testing") and restoring stiffness and damping (``motor.py``).
+* ``vel_max``: theta_dot_MAX of the pools, rad/s (Eq. 10): the servo's no-load speed, which
+  also bounds the target rate the pools write (``motor.py``). Missing in a file means 6.6
+  (the shipped body's Dynamixel MX-64); a body with other servos needs its own figure.
 * ``vestibular_gain``: the roll reflex's gain, 1/s (``_kernels.vestibular_step``; our addition,
   0 = none, as in the shipped gait). Missing in a file means 0.
 """
@@ -41,6 +44,7 @@ class Gait:
     acc_max: float = 120.0
     k_rest: float = 160.0
     d_rest: float = 12.6
+    vel_max: float = 6.6
     vestibular_gain: float = 0.0
     name: str = "gait"
     notes: dict = field(default_factory=dict)
@@ -51,7 +55,7 @@ class Gait:
             arr = np.asarray(getattr(self, key), dtype=np.float64)
             if arr.shape != (12,) or not np.all(np.isfinite(arr)):
                 raise ValueError(f"gait field {key!r} must be 12 finite numbers, got {arr.shape}")
-        for key in ("tau_f", "acc_max", "k_rest", "d_rest"):
+        for key in ("tau_f", "acc_max", "k_rest", "d_rest", "vel_max"):
             value = getattr(self, key)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"gait {key} must be a positive number, got {value}")
@@ -110,6 +114,7 @@ class Gait:
                 acc_max=float(raw.get("acc_max", 120.0)),
                 k_rest=float(raw.get("k_rest", 160.0)),
                 d_rest=float(raw.get("d_rest", 12.6)),
+                vel_max=float(raw.get("vel_max", 6.6)),
                 vestibular_gain=float(raw.get("vestibular_gain", 0.0)),
                 name=str(raw.get("name", path.stem)),
                 notes=dict(raw.get("notes", {})),

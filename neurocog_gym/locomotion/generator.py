@@ -126,6 +126,7 @@ class LocomotionGenerator:
         motor_params = replace(
             motor_params or MotorParams(),
             acc_max=(gait.acc_max,) * 12,
+            vel_max=(gait.vel_max,) * 12,
             k_rest=gait.k_rest,
             d_rest=gait.d_rest,
         )

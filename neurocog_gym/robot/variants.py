@@ -15,6 +15,12 @@ shank pitches ``pitch`` rad (the gait's shank pitch at the moments a sole meets 
 face): the part of the leg at a block's height is then the segment above the sole, not a
 shank that leads it by 10-17 cm. A rigid bent tube, no new joint; the same idea as the
 pantograph legs whose lowest segment stays upright. Measured in docs/oracle_notes.md.
+
+``servo_speed`` keeps everything but the servos' no-load speed: each position servo's velocity
+gain becomes its stall torque over the new speed (the slope of a DC motor's torque-speed line,
+as body v1 models its MX-64s), so the joints can move faster at the same torque. The pools'
+theta_dot_MAX is the gait's (``Gait.vel_max``): a gait for such a body says the same speed.
+A design study of the time a step over takes (docs/oracle_notes.md, "The servo's speed").
 """
 
 from __future__ import annotations
@@ -111,12 +117,12 @@ def bend_shanks(
             raise KeyError(f"the scene has no geom {prefix}_shank")
         if spec.geom(f"{prefix}_shank_low") is not None:
             raise ValueError(f"the shanks of this spec are bent already ({prefix}_shank_low)")
-        ends = np.array(shank.fromto, dtype=np.float64)  # a copy: fromto is a view of the spec
-        start, foot = ends[:3], ends[3:]
+        start, foot = _capsule_ends(shank)
         # In the shank's frame the direction R_y(-pitch) z is world-vertical at that pitch.
         kink = foot + low * np.array([-np.sin(pitch), 0.0, np.cos(pitch)])
         upper = float(np.linalg.norm(kink - start))
         mass = shank.mass
+        shank.pos, shank.quat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]  # fromto places it
         shank.fromto = [*start, *kink]
         shank.mass = mass * upper / (upper + low)
         g = shank.parent.add_geom()
@@ -128,6 +134,44 @@ def bend_shanks(
         g.rgba, g.group = shank.rgba, shank.group
         g.contype, g.conaffinity, g.condim = shank.contype, shank.conaffinity, shank.condim
     return spec
+
+
+def servo_speed(spec: mujoco.MjSpec, speed: float) -> mujoco.MjSpec:
+    """Give every position servo of ``spec`` the no-load speed ``speed`` rad/s, in place.
+
+    Each actuator's velocity gain kv (``biasprm[2] = -kv``) becomes its upper force limit (the
+    stall torque) over ``speed``; kp, the torque and everything else are unchanged.
+
+    Returns:
+        ``spec``.
+    """
+    if not (np.isfinite(speed) and speed > 0):
+        raise ValueError(f"speed must be a positive number of rad/s, got {speed}")
+    for act in spec.actuators:
+        stall = float(act.forcerange[1])
+        if not stall > 0:
+            raise ValueError(f"actuator {act.name} has no positive force limit to scale from")
+        bias = np.array(act.biasprm, dtype=np.float64)
+        bias[2] = -stall / speed
+        act.biasprm = bias
+    return spec
+
+
+def _capsule_ends(geom) -> tuple[np.ndarray, np.ndarray]:
+    """A capsule's (body-side, far) end points in its body's frame.
+
+    From ``fromto`` or, in a spec read from a compiled model (``write_assets``: ``fromto``
+    unset, NaN), from its ``pos``, ``quat`` and half-length; the far end is the one farther
+    from the body's origin (a shank's body origin is its knee).
+    """
+    ends = np.array(geom.fromto, dtype=np.float64)  # a copy: fromto is a view of the spec
+    if np.all(np.isfinite(ends)):
+        return ends[:3], ends[3:]
+    axis = np.zeros(3)
+    mujoco.mju_rotVecQuat(axis, np.array([0.0, 0.0, float(geom.size[1])]), np.array(geom.quat))
+    pos = np.array(geom.pos, dtype=np.float64)
+    a, b = pos - axis, pos + axis
+    return (a, b) if np.linalg.norm(a) <= np.linalg.norm(b) else (b, a)
 
 
 def write_assets(spec: mujoco.MjSpec, out: str | Path) -> Path:

@@ -49,7 +49,11 @@ def record_babbling(
     mujoco.mj_resetDataKeyframe(model, data, 0)
     posture = np.asarray(gait.posture)
     mp = replace(
-        MotorParams(), acc_max=(gait.acc_max,) * 12, k_rest=gait.k_rest, d_rest=gait.d_rest
+        MotorParams(),
+        acc_max=(gait.acc_max,) * 12,
+        vel_max=(gait.vel_max,) * 12,
+        k_rest=gait.k_rest,
+        d_rest=gait.d_rest,
     )
     pools = MotorNeuronPools(
         posture, robot.joint_lo, robot.joint_hi, mp, dt=0.01, knee_behind=robot.knee_behind

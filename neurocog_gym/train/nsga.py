@@ -450,6 +450,8 @@ def _gait_from_dict(raw: dict) -> Gait:
         acc_max=float(raw["acc_max"]),
         k_rest=float(raw["k_rest"]),
         d_rest=float(raw["d_rest"]),
+        vel_max=float(raw.get("vel_max", 6.6)),
+        vestibular_gain=float(raw.get("vestibular_gain", 0.0)),
         name=str(raw.get("name", "gait")),
         notes=dict(raw.get("notes", {})),
     )

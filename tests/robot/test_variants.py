@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import neurocog_gym  # noqa: F401  (registers the envs)
+from neurocog_gym import paths
 from neurocog_gym.robot import names
 from neurocog_gym.robot.variants import (
     KINKED_LOW,
@@ -203,3 +204,67 @@ def test_nsga_configs_from_before_the_body_resume_on_v1():
     assert NSGAConfig.from_json(raw).eval.body == "v2"
     del raw["eval"]["body"]
     assert NSGAConfig.from_json(raw).eval.body == "v1"
+
+
+def test_servo_speed_scales_the_velocity_gain_only():
+    from neurocog_gym.robot.variants import servo_speed
+
+    spec = mujoco.MjSpec.from_file(str(paths.asset(paths.SCENE_XML)))
+    before = spec.compile()
+    after = servo_speed(spec, 15.0).compile()
+    stall = before.actuator_forcerange[:, 1]
+    assert np.allclose(before.actuator_biasprm[:, 2], -0.91)  # the MX-64's 6 / 6.6
+    assert np.allclose(after.actuator_biasprm[:, 2], -stall / 15.0)
+    assert np.array_equal(after.actuator_biasprm[:, :2], before.actuator_biasprm[:, :2])
+    assert np.array_equal(after.actuator_gainprm, before.actuator_gainprm)
+    assert np.array_equal(after.actuator_forcerange, before.actuator_forcerange)
+    with pytest.raises(ValueError, match="speed must be a positive"):
+        servo_speed(spec, 0.0)
+
+
+def test_gait_vel_max_reaches_the_pools(tmp_path):
+    import dataclasses
+
+    from neurocog_gym.locomotion.gait import Gait, default_gait
+    from neurocog_gym.locomotion.generator import LocomotionGenerator
+
+    shipped = default_gait()
+    assert shipped.vel_max == 6.6  # a file without the field: the MX-64's speed
+    fast = dataclasses.replace(shipped, vel_max=15.0)
+    fast.save(tmp_path / "g.json")
+    loaded = Gait.load(tmp_path / "g.json")
+    assert loaded.vel_max == 15.0
+    model = mujoco.MjModel.from_xml_path(str(paths.asset(paths.SCENE_XML)))
+    lo, hi = model.jnt_range[1:, 0], model.jnt_range[1:, 1]
+    gen = LocomotionGenerator(loaded, lo, hi)
+    assert np.all(gen.pools.vel_max == 15.0)
+    with pytest.raises(ValueError, match="vel_max must be a positive"):
+        dataclasses.replace(shipped, vel_max=-1.0)
+
+
+def test_written_assets_keep_body_v2s_shanks(tmp_path):
+    # write_assets compiles the spec, so its capsules come back as pos / quat / size without
+    # fromto; body v2's bend at load time must build the same shanks from them. Checked in a
+    # fresh interpreter: there, before this fix, the bend read an unset fromto and left each
+    # shank straight with its lower segment above the knee (a process that had compiled the
+    # shipped scene first happened to get it right).
+    import json
+    import subprocess
+    import sys
+
+    from neurocog_gym.robot.model import load_model
+
+    write_assets(mujoco.MjSpec.from_file(str(paths.asset(paths.SCENE_XML))), tmp_path)
+    code = (
+        "import json; from neurocog_gym.robot.model import load_model; m = load_model(body='v2');"
+        "print(json.dumps({n: [m.geom(n).pos.tolist(), m.geom(n).size.tolist()] for n in "
+        f"{[f'{p}_{part}' for p in names.LEGS for part in ('shank', 'shank_low')]!r}}}))"
+    )
+    env = {**__import__("os").environ, "NEUROCOG_ASSETS": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    written = json.loads(out.stdout.strip().splitlines()[-1])
+    shipped = load_model(body="v2")
+    for name, (pos, size) in written.items():
+        assert np.allclose(shipped.geom(name).pos, pos, atol=1e-6), (name, pos)
+        assert np.allclose(shipped.geom(name).size, size, atol=1e-6), (name, size)
