@@ -64,6 +64,9 @@ def first_contacts(env, policy, seed: int, horizon: float | None = None) -> dict
             for b_geom, r_geom in ((g1, g2), (g2, g1)):
                 if b_geom in blocks and r_geom in robot:
                     name = mujoco.mj_id2name(u.model, mujoco.mjtObj.mjOBJ_GEOM, r_geom)
+                    if not name:  # the hip servo boxes have no name of their own
+                        body = int(u.model.geom_bodyid[r_geom])
+                        name = f"{mujoco.mj_id2name(u.model, mujoco.mjtObj.mjOBJ_BODY, body)}_servo"
                     seen.setdefault(name, round(float(u.data.time) - appeared, 3))
         if horizon is not None and float(u.data.time) - appeared > horizon:
             break
