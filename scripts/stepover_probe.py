@@ -150,13 +150,22 @@ def _lift_off(gym, seed: int, settle: float = 2.0, any_lift: bool = False) -> fl
     raise RuntimeError(f"seed {seed}: no FL lift-off within {settle + 3.0} s")
 
 
-def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
-    """One step-over; returns the first FL contact, the foot past the far face and uprightness."""
+def _hold_legs(text: str) -> list[int]:
+    """The legs of ``--hold_legs``; ``ValueError`` unless indices 0-3 separated by commas."""
+    legs = [int(v) for v in text.split(",")]
+    if not legs or any(leg not in (0, 1, 2, 3) for leg in legs):
+        raise ValueError(text)
+    return legs
+
+
+def probe(a: Args, seed: int, t_lift: float, gap: float, height: float, length: float) -> dict:
+    """One step-over from the FL lift-off at ``t_lift`` (``_lift_off``); returns the first FL
+    contact, the foot past the far face and uprightness."""
     import gymnasium as gym
 
     from neurocog_gym.robot.obstacles import Block, ObstaclePool
 
-    t_lift = _lift_off(gym, seed, any_lift=a.any_lift)
+    hold_legs = _hold_legs(a.hold_legs)
     env = gym.make("NeuroCog/Walk-v2")
     env.reset(seed=seed)
     u = env.unwrapped
@@ -188,7 +197,7 @@ def probe(a: Args, seed: int, gap: float, height: float, length: float) -> dict:
             act[[3, 6, 9]] = a.shift
             act[0] = a.shift_fl
         if (a.hold_knee or a.hold_hip) and t >= a.hold_from and (state or t < t_path):
-            for leg in (int(v) for v in a.hold_legs.split(",")):
+            for leg in hold_legs:
                 act[3 * leg + 1], act[3 * leg + 2] = a.hold_hip, a.hold_knee
         if a.primitive == "interrupt" and state:
             if state == 1:
@@ -296,10 +305,8 @@ def main(argv: list[str] | None = None) -> None:
     if a.seeds < 1:
         parser.error("--seeds must be >= 1")
     try:
-        legs = [int(v) for v in a.hold_legs.split(",")]
+        _hold_legs(a.hold_legs)
     except ValueError:
-        legs = [-1]
-    if not legs or any(leg not in (0, 1, 2, 3) for leg in legs):
         parser.error(
             f"--hold_legs must be leg indices 0-3 separated by commas, got {a.hold_legs!r}"
         )
@@ -316,13 +323,13 @@ def main(argv: list[str] | None = None) -> None:
     skipped = []
     for seed in range(a.seeds):
         try:
-            _lift_off(gym, seed, any_lift=a.any_lift)
+            t_lift = _lift_off(gym, seed, any_lift=a.any_lift)
         except RuntimeError as e:  # a gait whose lift-offs come before its hip flexor leads
             skipped.append(f"{e} (try --any_lift)")
             continue
         for gap in (0.02, 0.04, 0.06):
             for h, length in ((0.06, 0.05), (0.08, 0.08), (0.08, 0.12)):
-                res = probe(a, seed, gap, h, length)
+                res = probe(a, seed, t_lift, gap, h, length)
                 touch = res["first_touch"]
                 up = "yes" if res["upright"] else f"no ({res['t_fall']})"
                 ok = touch is None and res["past_far_face_m"] > 0 and res["upright"] and res["over"]

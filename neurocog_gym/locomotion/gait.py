@@ -93,6 +93,28 @@ class Gait:
         nio.atomic_write_text(path, json.dumps(self.to_json(), indent=1))
 
     @classmethod
+    def from_dict(cls, raw: dict, name: str = "gait") -> Gait:
+        """A gait from its JSON dict (``to_json``).
+
+        Missing optional fields take the defaults documented above; a missing ``name`` is
+        ``name``.
+        """
+        return cls(
+            genes=tuple(float(v) for v in raw["genes"]),
+            flexor_gain=tuple(float(v) for v in raw["flexor_gain"]),
+            extensor_gain=tuple(float(v) for v in raw["extensor_gain"]),
+            posture=tuple(float(v) for v in raw["posture"]),
+            tau_f=float(raw.get("tau_f", 1.0)),
+            acc_max=float(raw.get("acc_max", 120.0)),
+            k_rest=float(raw.get("k_rest", 160.0)),
+            d_rest=float(raw.get("d_rest", 12.6)),
+            vel_max=float(raw.get("vel_max", 6.6)),
+            vestibular_gain=float(raw.get("vestibular_gain", 0.0)),
+            name=str(raw.get("name", name)),
+            notes=dict(raw.get("notes", {})),
+        )
+
+    @classmethod
     def load(cls, path: str | os.PathLike) -> Gait:
         """Read a gait file; raise ``ValueError`` naming the file and the problem."""
         path = Path(path)
@@ -105,20 +127,7 @@ class Gait:
         if not isinstance(raw, dict) or raw.get("format") != FORMAT:
             raise ValueError(f"gait file {path} is not a {FORMAT} file")
         try:
-            return cls(
-                genes=tuple(float(v) for v in raw["genes"]),
-                flexor_gain=tuple(float(v) for v in raw["flexor_gain"]),
-                extensor_gain=tuple(float(v) for v in raw["extensor_gain"]),
-                posture=tuple(float(v) for v in raw["posture"]),
-                tau_f=float(raw.get("tau_f", 1.0)),
-                acc_max=float(raw.get("acc_max", 120.0)),
-                k_rest=float(raw.get("k_rest", 160.0)),
-                d_rest=float(raw.get("d_rest", 12.6)),
-                vel_max=float(raw.get("vel_max", 6.6)),
-                vestibular_gain=float(raw.get("vestibular_gain", 0.0)),
-                name=str(raw.get("name", path.stem)),
-                notes=dict(raw.get("notes", {})),
-            )
+            return cls.from_dict(raw, name=path.stem)
         except (KeyError, TypeError, ValueError) as e:
             raise ValueError(f"gait file {path} is malformed: {e}") from None
 

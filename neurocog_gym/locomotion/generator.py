@@ -41,7 +41,7 @@ only scales and mixes the CPG drive on its way to the pools.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -90,6 +90,17 @@ class ProvisionParams:
     """Seconds over which the CPG drive fades in after a reset (soft start); 0 disables it."""
 
 
+def gait_motor_params(gait: Gait, base: MotorParams | None = None) -> MotorParams:
+    """The pools' constants with the gait's theta_dd_MAX, theta_dot_MAX and restoring term."""
+    return replace(
+        base or MotorParams(),
+        acc_max=(gait.acc_max,) * 12,
+        vel_max=(gait.vel_max,) * 12,
+        k_rest=gait.k_rest,
+        d_rest=gait.d_rest,
+    )
+
+
 class LocomotionGenerator:
     """CPG + motor-neuron pools for one robot (Fig. 6), with touch feedback.
 
@@ -114,8 +125,6 @@ class LocomotionGenerator:
         provision_params: ProvisionParams | None = None,
         knee_behind: np.ndarray | None = None,
     ):
-        from dataclasses import replace
-
         self.gait = gait
         self.dt = dt
         cpg_params = replace(cpg_params or CPGParams(), tau_f=gait.tau_f)
@@ -123,13 +132,7 @@ class LocomotionGenerator:
         self.posture = np.asarray(gait.posture, dtype=np.float64)
         self.g_flex = np.asarray(gait.flexor_gain, dtype=np.float64) * _JOINT_SIGN
         self.g_ext = np.asarray(gait.extensor_gain, dtype=np.float64) * _JOINT_SIGN
-        motor_params = replace(
-            motor_params or MotorParams(),
-            acc_max=(gait.acc_max,) * 12,
-            vel_max=(gait.vel_max,) * 12,
-            k_rest=gait.k_rest,
-            d_rest=gait.d_rest,
-        )
+        motor_params = gait_motor_params(gait, motor_params)
         self.pools = MotorNeuronPools(
             self.posture, q_lo, q_hi, motor_params, dt, knee_behind=knee_behind
         )

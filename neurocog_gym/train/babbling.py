@@ -19,7 +19,8 @@ import mujoco
 import numpy as np
 
 from neurocog_gym.locomotion.gait import Gait, default_gait
-from neurocog_gym.locomotion.motor import MotorNeuronPools, MotorParams
+from neurocog_gym.locomotion.generator import gait_motor_params
+from neurocog_gym.locomotion.motor import MotorNeuronPools
 from neurocog_gym.robot.model import RobotIndex, load_model
 
 STAND_HEIGHT = 0.45
@@ -35,8 +36,6 @@ def record_babbling(
         rad/s^2, ``touch_prev`` (n, 4), ``command`` (n, 12) Theta in [-1, 1], ``foot`` (n, 4, 3)
         foot positions relative to the torso, m.
     """
-    from dataclasses import replace
-
     from tqdm import tqdm
 
     if n_samples < 1:
@@ -48,13 +47,7 @@ def record_babbling(
     robot = RobotIndex.build(model)
     mujoco.mj_resetDataKeyframe(model, data, 0)
     posture = np.asarray(gait.posture)
-    mp = replace(
-        MotorParams(),
-        acc_max=(gait.acc_max,) * 12,
-        vel_max=(gait.vel_max,) * 12,
-        k_rest=gait.k_rest,
-        d_rest=gait.d_rest,
-    )
+    mp = gait_motor_params(gait)
     pools = MotorNeuronPools(
         posture, robot.joint_lo, robot.joint_hi, mp, dt=0.01, knee_behind=robot.knee_behind
     )

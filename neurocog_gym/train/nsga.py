@@ -434,27 +434,10 @@ def read_run(out: str | os.PathLike) -> tuple[NSGAConfig, Gait]:
         if raw.get("format") != RUN_FORMAT:
             raise ValueError(f"not a {RUN_FORMAT} file")
         config = NSGAConfig.from_json(raw["config"])
-        base_gait = _gait_from_dict(raw["base_gait"])
+        base_gait = Gait.from_dict(raw["base_gait"])
     except (ValueError, KeyError, TypeError) as e:
         raise ValueError(f"run file {path} is unreadable or corrupt ({_first_line(e)})") from None
     return config, base_gait
-
-
-def _gait_from_dict(raw: dict) -> Gait:
-    return Gait(
-        genes=tuple(float(v) for v in raw["genes"]),
-        flexor_gain=tuple(float(v) for v in raw["flexor_gain"]),
-        extensor_gain=tuple(float(v) for v in raw["extensor_gain"]),
-        posture=tuple(float(v) for v in raw["posture"]),
-        tau_f=float(raw["tau_f"]),
-        acc_max=float(raw["acc_max"]),
-        k_rest=float(raw["k_rest"]),
-        d_rest=float(raw["d_rest"]),
-        vel_max=float(raw.get("vel_max", 6.6)),
-        vestibular_gain=float(raw.get("vestibular_gain", 0.0)),
-        name=str(raw.get("name", "gait")),
-        notes=dict(raw.get("notes", {})),
-    )
 
 
 def _history_record(algorithm, generation: int, evals: int, wall: float, elapsed: float) -> dict:
