@@ -18,7 +18,10 @@ Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers mult
   by which the median swing is shorter than S; with ``--hip_height H``: 100 (``--hip_weight``)
   per metre by which the mean hip height falls short of H (all three used for body v2, off by
   default); with
-  ``--perturb K`` every other seed walks with every K-th front swing a high step.
+  ``--perturb K`` every other seed walks with every K-th front swing a high step; with
+  ``--avoid_weight W`` each seed also backs off and side-steps as the AEF's teacher does
+  (``avoid_stats``): a fall as above, W per metre the side step falls short of ``--avoid_side``
+  and W per radian of heading lost.
 
 Body v1's numbers came from four chained runs of this search (about 1,100 candidates): from the
 v0 numbers scaled to the longer legs (theta_dd_MAX x 0.55, tau_f x 1.3, knee synapses x 0.7,
@@ -115,6 +118,12 @@ class Args:
     support: float = 0.0
     """Weight of the share of time with fewer than three soles on the ground (sole below
     4 mm), for a walk (0: not used)."""
+    avoid_weight: float = 0.0
+    """Weight of the avoidance provisions (``avoid_stats``): each seed also backs off and
+    side-steps as the AEF's teacher commands; cost per metre the side step falls short of
+    ``--avoid_side`` and per radian of heading lost, a fall as in the walk (0: not used)."""
+    avoid_side: float = 0.4
+    """Wanted sideways displacement of ``avoid_stats``' side step, m."""
 
 
 def walk_stats(
@@ -243,6 +252,61 @@ def walk_stats(
             "under3": float((air.sum(1) >= 2).mean())}  # fmt: skip
 
 
+AVOID_REVERSE = 0.6
+"""Seconds of ``avoid_stats``' back-off (s_SAG -1, the teacher's REVERSE)."""
+AVOID_SIDE = 2.0
+"""Seconds of ``avoid_stats``' side step."""
+
+
+def avoid_stats(design: TrotDesign, seed: int, gait=None) -> dict:
+    """Walk 2 s, back off and side-step as the AEF's teacher commands, walk on 1 s.
+
+    The provisions are those of ``locomotion.avoidance.AvoidanceParams``' REVERSE and SIDE states
+    (no block in the lane: the stride cancellation ``k_side``), the side to the left on even
+    seeds and to the right on odd ones, the teacher's heading feedback included. Returns
+    whether it fell (and when), the sideways displacement in the start heading's frame (signed
+    towards the commanded side) and the heading lost at the end, rad.
+    """
+    from neurocog_gym.locomotion.avoidance import AvoidanceParams, sag_for_stride
+
+    p = AvoidanceParams()
+    env = WalkEnv(gait=gait if gait is not None else build(design))
+    env.reset(seed=seed)
+    side = 1.0 if seed % 2 == 0 else -1.0
+    t_rev, t_side = 2.0 + AVOID_REVERSE, 2.0 + AVOID_REVERSE + AVOID_SIDE
+    seconds = t_side + 1.0
+    action = np.zeros(15)
+    sag_side = sag_for_stride(1.0 - p.k_side, p.sag_gain, p.brake_from)
+    xy0, yaw0 = None, 0.0
+    for _ in range(int(round(seconds / env.dt))):
+        t = env.data.time
+        yaw = _yaw(env.data.qpos[3:7])
+        if xy0 is None and t >= 2.0:
+            xy0, yaw0 = env.data.qpos[:2].copy(), yaw
+        ey = float(np.remainder(yaw - yaw0 + np.pi, 2 * np.pi) - np.pi)
+        if xy0 is None or t >= t_side:
+            action[12:] = 0.0
+        elif t < t_rev:
+            action[12:] = (-1.0, 0.0, 0.0)
+        else:
+            turn = -p.side_dir * ey - side * p.side_dir_ff
+            action[12:] = (sag_side, side * p.side_cor, min(max(turn, -1.0), 1.0))
+        _, _, term, trunc, _ = env.step(action)
+        if term or trunc:
+            env.close()
+            return {"fell": True, "t": env.data.time}
+    d = env.data.qpos[:2] - xy0
+    left = -np.sin(yaw0) * d[0] + np.cos(yaw0) * d[1]
+    ey = float(np.remainder(_yaw(env.data.qpos[3:7]) - yaw0 + np.pi, 2 * np.pi) - np.pi)
+    env.close()
+    return {"fell": False, "t": seconds, "side": float(side * left), "heading": abs(ey)}
+
+
+def _yaw(q: np.ndarray) -> float:
+    w, x, y, z = q
+    return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+
+
 def cost(
     design: TrotDesign,
     seeds: int,
@@ -260,10 +324,18 @@ def cost(
     liftoff: bool = False,
     hip_weight: float = 100.0,
     side_weight: float = 20.0,
+    avoid_weight: float = 0.0,
+    avoid_side: float = 0.4,
 ) -> float:
     """The search's cost (module docstring), summed over the seeds."""
     c = 0.0
     for seed in range(seeds):
+        if avoid_weight:
+            a = avoid_stats(design, seed)
+            if a["fell"]:
+                c += 100.0 + 10.0 * (2.0 + AVOID_REVERSE + AVOID_SIDE + 1.0 - a["t"])
+            else:
+                c += avoid_weight * (max(0.0, avoid_side - a["side"]) + a["heading"])
         s = walk_stats(design, seed, seconds, perturb if seed % 2 else 0, kinds, liftoff)
         if s["fell"]:
             c += 100.0 + 10.0 * (seconds - s["t"])

@@ -1,5 +1,6 @@
 """The soak, gait-search and body-figure scripts end to end on tiny budgets (subprocess)."""
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -73,3 +74,17 @@ def test_highstep_tolerance_steps_over_from_the_liftoff_and_refuses_a_bad_trigge
     bad = subprocess.run([sys.executable, script, "--trigger", "soon"],
                          capture_output=True, text=True, cwd=ROOT)  # fmt: skip
     assert bad.returncode == 2 and "--trigger must be" in bad.stderr
+
+
+def test_search_gait_avoid_stats_side_steps_the_commanded_way_and_sees_a_fall():
+    """The shipped trot side-steps as the AEF's teacher commands it (left on even seeds, right on
+    odd ones); gait D of docs/oracle_notes.md falls in the back-off (s_SAG -1)."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from design_gait import TrotDesign
+    from search_gait import avoid_stats
+
+    for seed in (0, 1):
+        s = avoid_stats(TrotDesign(), seed)
+        assert not s["fell"] and s["side"] > 0.3 and s["heading"] < 0.2, s
+    d = json.loads((ROOT / "docs" / "data" / "gait_long_swing_d.json").read_text())
+    assert avoid_stats(dataclasses.replace(TrotDesign(), **d), 0)["fell"]

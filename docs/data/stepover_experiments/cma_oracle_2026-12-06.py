@@ -1,6 +1,10 @@
 """CMA-ES over OraclePolicy thresholds on sudden training trials (scratch, 2026-12-06).
 
-    NEUROCOG_ASSETS=D python cma_oracle_2026-12-06.py N_TRIALS RUN_SEED OUT.json GENERATIONS
+    NEUROCOG_ASSETS=D python cma_oracle_2026-12-06.py N_TRIALS RUN_SEED OUT.json GENERATIONS [START.json [perceived]]
+
+START.json: start from its "params" (an earlier OUT.json) instead of SPACE's starts; "perceived":
+the script reads ``remembered_blocks`` (the env's perceived, remembered boxes) in place of
+``true_blocks``, how far the step-over gets on what the robot perceives.
 """
 import sys, json, numpy as np, cma, multiprocessing as mp
 from dataclasses import replace
@@ -13,7 +17,9 @@ SPACE = {  # name: (lo, hi, start)
     "hold_knee": (-1.0, 0.0, -0.5),
 }
 NAMES = list(SPACE); LO = np.array([SPACE[k][0] for k in NAMES]); HI = np.array([SPACE[k][1] for k in NAMES])
-X0 = (np.array([SPACE[k][2] for k in NAMES]) - LO) / (HI - LO)
+START = json.load(open(sys.argv[5]))["params"] if len(sys.argv) > 5 else {k: v[2] for k, v in SPACE.items()}
+X0 = np.clip((np.array([START[k] for k in NAMES]) - LO) / (HI - LO), 0, 1)
+PERCEIVED = len(sys.argv) > 6 and sys.argv[6] == "perceived"
 N, SEED = int(sys.argv[1]), int(sys.argv[2])
 _env = None
 def params_of(x):
@@ -27,7 +33,13 @@ def evaluate(x):
     if _env is None:
         _env = make_env("sudden", "on", None, privileged=True,
                         env_kwargs={"effectivity": EffectivityParams(reach=0.06, swing_time=0.27)})
-    pol = OraclePolicy(replace(OracleParams(), **params_of(x)))
+    class Perceived(OraclePolicy):
+        def __call__(self, obs):
+            obs = dict(obs)
+            obs["true_blocks"] = obs["remembered_blocks"]
+            return super().__call__(obs)
+
+    pol = (Perceived if PERCEIVED else OraclePolicy)(replace(OracleParams(), **params_of(x)))
     s = t = f = 0
     for i in range(N):
         r = run_trial(_env, pol, TrialSpec("sudden", i, trial_seed(SEED, "sudden", i)))
