@@ -1,4 +1,4 @@
-"""A picture strip of the AEF (or the shipped PPO policy) on a sudden block.
+"""A picture strip of the AEF (or the shipped PPO policy) on a sudden block, or on stepping stones.
 
 One seeded ``NeuroCog/SuddenObstacle-v2`` episode under ``--policy aef`` (the fit and the AEF
 network on the observation; its stop / side-step / pass comes from the fit's provision teacher,
@@ -12,6 +12,14 @@ before the block appears, the back-off under way, the first frame of the side st
 
 The matching video:
 ``neurocog record-video --policy aef --seed 1 --out docs/img/aef_sudden.mp4``.
+
+``--env stones``: one ``NeuroCog/SteppingStones-v2`` episode instead, four frames evenly spaced
+from the start to the episode's end (a foot in the pit, a fall, across or the time limit); each
+predicted foothold is drawn green where the map shows level support under it and no block is
+in the way (``foothold_safe``, Video S2's circles), red otherwise:
+
+    MUJOCO_GL=egl .venv/bin/python scripts/render_strip.py --env stones --policy blind --seed 3 \
+        --out docs/img/stones_strip.png
 """
 
 from __future__ import annotations
@@ -36,6 +44,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--policy", default="aef", choices=("aef", "ppo", "blind", "oracle"),
                     help="controller (blind and oracle: four frames evenly spaced from the "
                          "block's appearance to 1.2 s later)")  # fmt: skip
+    ap.add_argument("--env", default="sudden", choices=("sudden", "stones"),
+                    help="SuddenObstacle-v2 or SteppingStones-v2")  # fmt: skip
     ap.add_argument("--seed", type=int, default=1, help="episode seed")
     ap.add_argument("--width", type=int, default=400, help="width of one frame, pixels")
     ap.add_argument("--height", type=int, default=360, help="frame height, pixels")
@@ -44,7 +54,7 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     policy = make_policy(args.policy)
     env = gym.make(
-        "NeuroCog/SuddenObstacle-v2",
+        "NeuroCog/SuddenObstacle-v2" if args.env == "sudden" else "NeuroCog/SteppingStones-v2",
         render_mode="rgb_array",
         width=args.width,
         height=args.height,
@@ -60,25 +70,30 @@ def main(argv: list[str] | None = None) -> None:
         return STATE_NAMES[state] if state is not None else ""
 
     frames, states, times, appeared = [], [], [], None
-    done = False
+    done, info = False, {}
     while not done:
-        obs, _, terminated, truncated, _ = env.step(policy(obs))
+        obs, _, terminated, truncated, info = env.step(policy(obs))
         done = terminated or truncated
         frames.append(env.render())
         states.append(state())
         times.append(float(u.data.time))
-        if appeared is None and u.appeared_at is not None:
+        if appeared is None and getattr(u, "appeared_at", None) is not None:
             appeared = len(frames) - 1
     env.close()
+    if args.env == "stones":
+        picks = [int(round(v)) for v in np.linspace(0, len(frames) - 1, 4)]
+        _write(args.out, [frames[i] for i in picks])
+        pit = f", a foot in the pit at {info['pit_at']:.2f} s" if info.get("pit_at") else ""
+        print(f"wrote {args.out}: frames at t = {', '.join(f'{times[i]:.2f}' for i in picks)} s "
+              f"(outcome {info.get('outcome')}{pit})")  # fmt: skip
+        return
     if appeared is None:
         raise SystemExit(f"seed {args.seed}: no block appeared; try another seed")
     dt = times[1] - times[0]
     if args.policy in ("blind", "oracle"):
         end = min(appeared + int(1.2 / dt), len(frames) - 1)
         picks = [int(round(v)) for v in np.linspace(appeared, end, 4)]
-        strip = np.concatenate([frames[i] for i in picks], axis=1)
-        with atomic_path(args.out) as tmp:
-            iio.imwrite(tmp, strip)
+        _write(args.out, [frames[i] for i in picks])
         print(f"wrote {args.out}: frames at t = {', '.join(f'{times[i]:.2f}' for i in picks)} s")
         return
     before = max(appeared - int(0.05 / dt), 0)
@@ -86,13 +101,17 @@ def main(argv: list[str] | None = None) -> None:
     passing = next((i for i, s in enumerate(states) if s == "pass"), len(frames) // 2)
     last = max(len(frames) - 1 - int(0.3 / dt), passing)
     picks = [before, backing, passing, last]
-    strip = np.concatenate([frames[i] for i in picks], axis=1)
-    with atomic_path(args.out) as tmp:
-        iio.imwrite(tmp, strip)
+    _write(args.out, [frames[i] for i in picks])
     print(
         f"wrote {args.out}: frames at t = {', '.join(f'{times[i]:.2f}' for i in picks)} s "
         f"(block appeared at {times[appeared]:.2f} s; episode {times[-1]:.2f} s)"
     )
+
+
+def _write(out: str, frames: list[np.ndarray]) -> None:
+    """The frames side by side as one PNG, written atomically."""
+    with atomic_path(out) as tmp:
+        iio.imwrite(tmp, np.concatenate(frames, axis=1))
 
 
 if __name__ == "__main__":

@@ -691,6 +691,15 @@ class ObstacleEnv(QuadrupedEnv):
                 viewer.add_marker(**marker)
         return super().render()
 
+    def foothold_marker_safe(self) -> np.ndarray:
+        """(4,) bool: which predicted footholds the overlay draws green (the rest red).
+
+        Here: outside every remembered block, on the foothold and along the swing path (the
+        ``foothold_safe`` and ``path_meets_block`` checks); the stepping stones add the map's
+        support under the foothold.
+        """
+        return np.asarray(self.eff.foothold_safe, bool) & np.asarray(self.eff.path_safe, bool)
+
 
 def _env_perception(params: PipelineParams | None, tof: ToFArray) -> PipelineParams:
     """``params`` (or the defaults) without the raw-point additions nothing in the env reads.
@@ -812,7 +821,7 @@ def overlay_markers(
 
     The facets filled and the graph nodes and edges coloured by the kind of surface their
     label is (terrain green, wall blue, object red), attention boxes, and footholds (green
-    safe, red unsafe).
+    safe, red unsafe: ``env.foothold_marker_safe``).
     """
     import mujoco
 
@@ -851,8 +860,9 @@ def overlay_markers(
                         "pos": (box[1] + box[0]) / 2,
                         "rgba": np.array([1.0, 0.3, 0.2, 0.18])})  # fmt: skip
     if env.eff is not None:
+        marker_safe = env.foothold_marker_safe()
         for leg in range(4):
-            safe = env.eff.foothold_safe[leg] and env.eff.path_safe[leg]
+            safe = marker_safe[leg]
             rgba = np.array([0.1, 0.9, 0.2, 0.9]) if safe else np.array([1.0, 0.1, 0.1, 0.9])
             pos = env.eff.foothold[leg].copy()
             pos[2] = max(pos[2], 0.0) + 0.005

@@ -331,6 +331,14 @@ class SteppingStonesEnv(ObstacleEnv):
             self.walking_level(), self.support_params,
         )  # fmt: skip
 
+    def foothold_marker_safe(self) -> np.ndarray:
+        """(4,) bool: which predicted footholds the overlay draws green.
+
+        Here ``foothold_safe``'s answer, the map's support included, with no block in the swing's
+        way (Video S2's green and red circles).
+        """
+        return super().foothold_marker_safe() & self.foothold_supported()
+
     def _get_obs(self) -> dict[str, np.ndarray]:
         obs = super()._get_obs()
         if self._perceive:

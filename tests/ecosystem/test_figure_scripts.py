@@ -40,6 +40,19 @@ def test_strip_picks_four_frames_around_the_stop(tmp_path):
     assert iio.imread(out).shape == (120, 640, 3)
 
 
+def test_stones_strip_runs_to_the_episodes_end(tmp_path):
+    import imageio.v3 as iio
+
+    out = tmp_path / "stones.png"
+    r = _run([SCRIPTS / "render_strip.py", "--env", "stones", "--policy", "blind", "--seed", "3",
+              "--width", "160", "--height", "120", "--out", out])  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert iio.imread(out).shape == (120, 640, 3)
+    # seed 3: the blind trot's foot goes into the pit; the last frame is that cycle's
+    assert re.search(r"frames at t = 0\.01, .*, 1\.44 s \(outcome fail, a foot in the pit at "
+                     r"1\.44 s\)", r.stdout)  # fmt: skip
+
+
 def test_trial_contacts_lists_each_trials_first_block_contacts():
     r = _run([SCRIPTS / "trial_contacts.py", "--policy", "blind", "--trials", "2"])
     assert r.returncode == 0, r.stderr

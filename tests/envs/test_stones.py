@@ -379,6 +379,36 @@ def test_foothold_supported_is_read_from_the_map_not_the_stones(env):
     assert not obs["foothold_supported"].any() and not obs["foothold_safe"].any()
 
 
+def test_overlay_footholds_are_green_where_the_observation_says_safe(env):
+    """A drawn foothold is green where the observation says the foothold is safe (the map's
+    support included: Video S2's green and red circles) and the swing path meets no block; the
+    obstacle envs' markers follow the same two keys without the support."""
+    from neurocog_gym.envs.obstacle import overlay_markers
+
+    u = env.unwrapped
+    env.reset(seed=1)
+    green = np.array([0.1, 0.9, 0.2, 0.9])
+    seen_green = seen_red = 0
+    for _ in range(120):
+        obs, *_ = env.step(ZERO)
+        drawn = [m for m in overlay_markers(u) if m["size"][0] == 0.025]
+        assert len(drawn) == 4
+        is_green = np.array([np.allclose(m["rgba"], green) for m in drawn])
+        said = obs["foothold_safe"].astype(bool) & ~obs["path_meets_block"].astype(bool)
+        np.testing.assert_array_equal(is_green, said)
+        assert not (is_green & ~obs["foothold_supported"].astype(bool)).any()
+        seen_green += int(is_green.sum())
+        seen_red += int((~is_green).sum())
+    assert seen_green > 0 and seen_red > 0  # both colours occur on a course
+    obstacle = gym.make("NeuroCog/StaticObstacle-v2")
+    obstacle.reset(seed=0)
+    for _ in range(60):
+        obs, *_ = obstacle.step(ZERO)
+    said = obs["foothold_safe"].astype(bool) & ~obs["path_meets_block"].astype(bool)
+    np.testing.assert_array_equal(obstacle.unwrapped.foothold_marker_safe(), said)
+    obstacle.close()
+
+
 def test_foothold_supported_is_mostly_right_when_it_says_supported(env):
     """Precision against the truth on blind walks: when the map says a swinging leg's foothold
     is on a stone, the stones agree (measured: 100 of 104 on seeds 0-7)."""
