@@ -269,7 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=("sudden", "static", "all", "stones", "stones-moving"),
                    default="all",
                    help="which task (all: sudden and static; stones, stones-moving: "
-                        "NeuroCog/SteppingStones-v2 still and moving)")  # fmt: skip
+                        "NeuroCog/SteppingStones-v3 still and moving)")  # fmt: skip
     p.add_argument("--trials", type=_positive_int, default=50,
                    help="per scenario (paper: 50)")  # fmt: skip
     p.add_argument("--seed", type=_nonneg_int, default=0,
@@ -277,7 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--policy", default="aef",
                    help="aef, aef-provision (interrupts off), blind, oracle (privileged "
                         "step-over script), ppo (the shipped PPO policy: "
-                        "trained on v0, refused until retrained on v2), AEF weights (.npz) or "
+                        "trained on v0, refused until retrained on v3), AEF weights (.npz) or "
                         "a stable-baselines3 model (.zip)")  # fmt: skip
     p.add_argument("--attention", choices=("on", "off", "mlgng"), default="on",
                    help="off: plain GNG instead of DD-GNG attention (the ablation); mlgng: "
@@ -287,8 +287,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "paper's) or points (the raw-point refinement); None: the env's "
                         "default (points)")  # fmt: skip
     p.add_argument("--body", choices=("v1", "v2"), default="v2",
-                   help="the robot body of the envs: v2 (bent shanks, the -v2 envs' default; "
-                        "docs/body_v2.md) or v1 (straight shanks, the -v1 envs')")  # fmt: skip
+                   help="the robot body of the envs: v2 (bent shanks, the -v2 and -v3 "
+                        "envs' default; docs/body_v2.md) or v1 (straight shanks, the -v1 "
+                        "envs')")  # fmt: skip
     p.add_argument("--max-seconds", type=_positive_float, default=None,
                    help="simulated seconds per trial (None: 7 s sudden, 10 s static)")  # fmt: skip
     p.add_argument("--workers", type=_positive_int, default=None,
@@ -308,13 +309,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("record-video",
                        help="an episode to MP4 with the attention graph, facets and footholds",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
-    p.add_argument("--env", default="NeuroCog/SuddenObstacle-v2",
+    p.add_argument("--env", default="NeuroCog/SuddenObstacle-v3",
                    help="registered env id (see neurocog info)")  # fmt: skip
     p.add_argument("--policy", default="aef",
                    help="aef, aef-provision (interrupts off), blind, ppo (the shipped "
-                        "PPO policy: trained on v0, refused until retrained on v2), AEF "
+                        "PPO policy: trained on v0, refused until retrained on v3), AEF "
                         "weights (.npz) or a stable-baselines3 model (.zip); "
-                        "Walk-v2 takes blind or a model trained on it")  # fmt: skip
+                        "Walk-v3 takes blind or a model trained on it")  # fmt: skip
     p.add_argument("--seconds", type=_positive_float, default=7.0,
                    help="simulated seconds (the episode may end sooner: fell or passed)",
                    )  # fmt: skip

@@ -1,4 +1,4 @@
-"""The walking demo: trot in ``NeuroCog/Walk-v2``, write a video and a gait plot."""
+"""The walking demo: trot in ``NeuroCog/Walk-v3``, write a video and a gait plot."""
 
 from __future__ import annotations
 
@@ -25,8 +25,8 @@ def walk_demo(
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    n = int(round(seconds / 0.01))  # Walk-v2's control cycle
-    env = gym.make("NeuroCog/Walk-v2", render_mode="rgb_array" if video else None,
+    n = int(round(seconds / 0.01))  # Walk-v3's control cycle
+    env = gym.make("NeuroCog/Walk-v3", render_mode="rgb_array" if video else None,
                    max_episode_steps=n, width=640, height=480)  # fmt: skip
     obs, _ = env.reset(seed=seed)
     base = env.unwrapped
@@ -102,7 +102,7 @@ def plot_gait(t, foot_z, touch, hip, cpg, path: Path, window: float = 3.0) -> No
     axes[3].set_ylabel("CPG hip output")
     axes[3].legend(ncol=2, fontsize=8)
     axes[3].set_xlabel("time (s)")
-    fig.suptitle("NeuroCog/Walk-v2 — default gait")
+    fig.suptitle("NeuroCog/Walk-v3 — default gait")
     fig.tight_layout()
     nio.atomic_savefig(fig, path, dpi=110)
     plt.close(fig)

@@ -3,7 +3,7 @@
 The obstacle envs' ``rgb_array`` frames carry the DD-GNG's facets filled by the kind of surface
 they belong to (terrain, wall, object), its nodes and edges, the attention boxes and the
 predicted footholds (green safe, red unsafe) — see ``envs.obstacle.overlay_markers``.
-``NeuroCog/Walk-v2`` has no perception, so its frames are the plain scene.
+``NeuroCog/Walk-v3`` has no perception, so its frames are the plain scene.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ def record_video(
     """Run one episode under ``policy`` and write its ``rgb_array`` frames to ``out``.
 
     Args:
-        env_id: a registered id, e.g. ``"NeuroCog/SuddenObstacle-v2"``.
+        env_id: a registered id, e.g. ``"NeuroCog/SuddenObstacle-v3"``.
         policy: ``"aef"``, ``"blind"``, an AEF weights file (``.npz``) or a stable-baselines3
             model (``.zip``); see ``policies.make_policy``.
         out: the MP4 file to write (folders are created).

@@ -1,7 +1,7 @@
 """Loop-closed attention timing: how fast the attention reacts to a newly appeared obstacle.
 
 The walking trial of ``fig9_density.py`` (``neurocog_gym.bench.perception_scenes.walking_trial``):
-the robot trots in ``NeuroCog/Walk-v2``, a paper-sized block appears 0.7–0.9 m ahead, the four ToF
+the robot trots in ``NeuroCog/Walk-v3``, a paper-sized block appears 0.7–0.9 m ahead, the four ToF
 sensors run at 45 fps and the attention pipeline (DD-GNG → affordance → suspected boxes → DD-GNG) is
 in the loop. Four pipelines see the same frames: DD-GNG and GNG, each either stepped every 0.01 s
 control cycle on the latest frame (what ``envs/obstacle.py`` does) or once per new frame. Times

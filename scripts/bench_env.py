@@ -3,7 +3,7 @@
 Parts (each printed as a markdown table; all timed interleaved in rounds, so that load from other
 processes falls on every row alike, and reported as medians over the rounds):
 
-1. ``--part env``: env steps/s of ``NeuroCog/SuddenObstacle-v2`` with full perception at default
+1. ``--part env``: env steps/s of ``NeuroCog/SuddenObstacle-v3`` with full perception at default
    settings (ToF 56 x 43 per sensor, numba caster, DD-GNG + affordances + effectivity every
    cycle), zero actions (CPG walking; an episode ends when the robot passes the block or at 7 s,
    and resets are counted in the time), beside ``Ant-v5`` with uniform random actions; the same
@@ -17,7 +17,7 @@ processes falls on every row alike, and reported as medians over the rounds):
    (docs/generated/benchmarks_env.md).
 2. ``--part ppo``: stable-baselines3 PPO training throughput (env steps/s of ``model.learn``,
    rollouts and updates) of ``scripts/train_ppo.py`` with the same hyper-parameters on
-   ``NeuroCog/SuddenObstacle-v2`` and on ``Ant-v5``; optionally the success rates of finished
+   ``NeuroCog/SuddenObstacle-v3`` and on ``Ant-v5``; optionally the success rates of finished
    ``neurocog bench`` runs (``--bench-runs``) side by side. Writes ``--ppo-out``
    (docs/generated/benchmarks_ppo.md).
 
@@ -46,7 +46,7 @@ import numpy as np
 import neurocog_gym  # noqa: F401  (registers the env ids)
 from neurocog_gym.bench.machine import field_doc, machine
 
-SUDDEN = "NeuroCog/SuddenObstacle-v2"
+SUDDEN = "NeuroCog/SuddenObstacle-v3"
 
 
 @dataclasses.dataclass(frozen=True)

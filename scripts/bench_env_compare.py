@@ -4,7 +4,7 @@ A speed change is only believed when measured against what it replaced on the sa
 the same time. This script checks the baseline commit out into a temporary git worktree, then
 times, in interleaved rounds, one fresh process per row:
 
-* ``NeuroCog/SuddenObstacle-v2`` (zero actions, resets inside) with the baseline's package
+* ``NeuroCog/SuddenObstacle-v3`` (zero actions, resets inside) with the baseline's package
   (``PYTHONPATH`` points at the worktree);
 * the same with this checkout's package;
 * Gymnasium's ``Ant-v5`` with random actions (the reference of the issue's target).
@@ -61,7 +61,7 @@ import sys, hashlib, numpy as np, gymnasium as gym
 import neurocog_gym  # noqa: F401
 from neurocog_gym.policies import make_policy
 h = hashlib.sha256()
-for env_id in ("NeuroCog/SuddenObstacle-v2", "NeuroCog/StaticObstacle-v2"):
+for env_id in ("NeuroCog/SuddenObstacle-v3", "NeuroCog/StaticObstacle-v3"):
     for seed in (0, 1):
         env = gym.make(env_id)
         policy = make_policy("aef")
@@ -128,7 +128,7 @@ def main(argv: list[str] | None = None) -> None:
             ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", tree, base], check=True
         )
         try:
-            sudden = "NeuroCog/SuddenObstacle-v2"
+            sudden = "NeuroCog/SuddenObstacle-v3"
             mark = " (uncommitted changes)" if dirty else ""
             rows = {
                 f"`{sudden}`, baseline {base}": (sudden, tree),

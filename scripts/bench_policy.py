@@ -1,6 +1,6 @@
 """Benchmark: the AEF's forward pass and decision against an env step (issue 22: <= 5 %).
 
-On ``NeuroCog/SuddenObstacle-v2`` (default perception), ``--episodes`` episodes run with the
+On ``NeuroCog/SuddenObstacle-v3`` (default perception), ``--episodes`` episodes run with the
 shipped AEF policy; each control cycle times the policy call (``AEFPolicy.__call__``: the fit's
 decision on the observation and, when it asks for it, the network's forward pass) and the env
 step that follows, with ``time.perf_counter``. Both are timed on the same cycles of the same
@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> None:
     import neurocog_gym  # noqa: F401  (registers the ids)
     from neurocog_gym.policies import make_policy, start_episode
 
-    env = gym.make("NeuroCog/SuddenObstacle-v2")
+    env = gym.make("NeuroCog/SuddenObstacle-v3")
     policy = make_policy("aef")
     obs, _ = env.reset(seed=1000)  # warm-up: numba compiles outside the timed episodes
     start_episode(policy, env)
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> None:
         "",
         f"`{' '.join(['python', 'scripts/bench_policy.py', *sys.argv[1:]])}` — "
         f"{datetime.date.today().isoformat()}, {machine('numpy', 'numba', 'mujoco')}, "
-        f"load {load:.1f}; {len(pol)} control cycles of {a.episodes} SuddenObstacle-v2 episodes.",
+        f"load {load:.1f}; {len(pol)} control cycles of {a.episodes} SuddenObstacle-v3 episodes.",
         "",
         "| per control cycle | median, µs | p90, µs |",
         "|---|---:|---:|",

@@ -1,6 +1,6 @@
 """The roll reflex (``Gait.vestibular_gain``): how many walks fall under front-leg disturbances.
 
-``NeuroCog/Walk-v2`` with the shipped gait (and optionally the knee-behind candidate body via
+``NeuroCog/Walk-v3`` with the shipped gait (and optionally the knee-behind candidate body via
 ``NEUROCOG_ASSETS``), the gait's roll reflex gain varied. Per gain and per disturbance kind,
 ``--seeds`` walks of ``--seconds`` in which from 2 s on every ``--every``-th swing of each
 front leg is disturbed the way a controller answering a block disturbs it
@@ -72,7 +72,7 @@ def main() -> None:
         f"{args.seeds} --seconds {args.seconds:g} --every {args.every} --kinds {args.kinds}`  \n"
         f"Machine: {machine('mujoco', 'numpy')}; {time.time() - t0:.0f} s. Simulated time: "
         "the figures do not depend on the load.\n\n"
-        f"Gait: {base.name} (the shipped one), `vestibular_gain` varied. Walk-v2, "
+        f"Gait: {base.name} (the shipped one), `vestibular_gain` varied. Walk-v3, "
         f"{args.seconds:g} s per walk, from 2 s on every {args.every}. swing of each front leg "
         "disturbed (h high step, d shortened step, o step over; the script's docstring).\n\n"
         f"{table}\n"

@@ -1,6 +1,6 @@
 """Vector-env throughput: one env, SyncVectorEnv, SpinVectorEnv and BatchVectorEnv at N envs.
 
-For each env id (default ``NeuroCog/SuddenObstacle-v2`` and ``NeuroCog/Walk-v2``) and each N
+For each env id (default ``NeuroCog/SuddenObstacle-v3`` and ``NeuroCog/Walk-v3``) and each N
 (default 2 and 8), env steps/s of
 
 * one env stepped in this process (``gymnasium.make``, its own episode);
@@ -24,7 +24,7 @@ in the same round (in brackets: the lowest and highest round). The load average 
 recorded before and after each id. Writes ``--out`` (docs/generated/benchmarks_vec.md).
 
     python scripts/bench_vec.py
-    python scripts/bench_vec.py --ids NeuroCog/Walk-v2 --ns 2 --rounds 3 --steps 50
+    python scripts/bench_vec.py --ids NeuroCog/Walk-v3 --ns 2 --rounds 3 --steps 50
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ TARGETS = {2: 1.85, 8: 1.9}
 class Args:
     """Command-line arguments."""
 
-    ids: tuple[str, ...] = ("NeuroCog/SuddenObstacle-v2", "NeuroCog/Walk-v2")
+    ids: tuple[str, ...] = ("NeuroCog/SuddenObstacle-v3", "NeuroCog/Walk-v3")
     """Env ids to measure."""
     ns: tuple[int, ...] = (2, 8)
     """Numbers of sub-envs."""

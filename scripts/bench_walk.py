@@ -1,10 +1,10 @@
-"""Walk-v2 benchmark: throughput beside Gymnasium's Ant-v5, and the default gait's statistics.
+"""Walk-v3 benchmark: throughput beside Gymnasium's Ant-v5, and the default gait's statistics.
 
 Three parts, printed as markdown tables and written to ``--out``
 (``docs/generated/benchmarks_walk.md``):
 
 1. Throughput, one process pinned to one core, timed interleaved in rounds (so load from other
-   processes falls on every row alike), medians over the rounds: ``NeuroCog/Walk-v2`` env steps/s
+   processes falls on every row alike), medians over the rounds: ``NeuroCog/Walk-v3`` env steps/s
    with zero actions (plain CPG walking) and with uniform random actions, Gymnasium's ``Ant-v5``
    with random actions, and raw ``mujoco.mj_step`` of both scenes.
 2. Gait statistics of the shipped default gait on flat ground: ``--seconds`` (60) per seed for
@@ -49,7 +49,7 @@ import neurocog_gym  # noqa: F401  (registers the env ids)
 from neurocog_gym.bench.machine import field_doc, machine
 from neurocog_gym.robot.names import LEGS
 
-WALK = "NeuroCog/Walk-v2"
+WALK = "NeuroCog/Walk-v3"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -338,7 +338,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     command = "python scripts/bench_walk.py " + " ".join(sys.argv[1:] if argv is None else argv)
     report = [
-        "# Walk-v2 benchmark",
+        "# Walk-v3 benchmark",
         "",
         f"Command: `{command.strip()}`  ",
         f"Machine: {machine('mujoco', 'gymnasium', 'numpy', pinned=True)}  ",
@@ -351,8 +351,8 @@ def main(argv: list[str] | None = None) -> int:
         "",
         *speed_lines,
         "",
-        f"Walk-v2 (zero actions) runs at {ratio:.2f}x the env steps/s of Ant-v5 (target >= 0.5x). "
-        "One Walk-v2 step is 10 ms of simulated time (5 physics steps of 2 ms, the CPG and the "
+        f"Walk-v3 (zero actions) runs at {ratio:.2f}x the env steps/s of Ant-v5 (target >= 0.5x). "
+        "One Walk-v3 step is 10 ms of simulated time (5 physics steps of 2 ms, the CPG and the "
         "motor-neuron pools), one Ant-v5 step is 50 ms (5 physics steps of 10 ms).",
         "",
         "## 2. Default gait on flat ground",

@@ -2,7 +2,7 @@
 
 Prints and writes: segment lengths, masses, hip height, servo model (from the compiled model),
 and the sweep of ``neurocog_gym.bench.body.interrupt_lift_sweep``: the lift interrupt (knee +1,
-hip +0.3) applied at phases 0 .. 0.5 of front swings on ``NeuroCog/Walk-v2``; per phase the
+hip +0.3) applied at phases 0 .. 0.5 of front swings on ``NeuroCog/Walk-v3``; per phase the
 lowest peak sole height within 0.15 s and the slowest time to 11 cm, over every swing tested.
 
     python scripts/body_figures.py [--seeds 3] [--swings 2] [--out docs/body.md]

@@ -35,7 +35,7 @@ neuron A to neuron B, positive in Eq. 5; HF/HE hip flexor/extensor, KF/KE knee f
 
 Numeric values (body v1, issue 21): the structure above is the v0 design, unchanged. The numbers
 of ``TrotDesign`` (synapses, tau_f, k_rest, theta_dd_MAX, posture) were found again on the v1 body
-by a single-process local random search on ``NeuroCog/Walk-v2`` (zero action, 2-3 seeds of 8 s,
+by a single-process local random search on ``NeuroCog/Walk-v3`` (zero action, 2-3 seeds of 8 s,
 the first 2 s left out, one or two numbers perturbed by 6 % at a time and kept when better),
 starting from the v0 numbers scaled to the longer legs (theta_dd_MAX x 0.55, tau_f x 1.3, knee
 synapses x 0.7, posture hip -0.8 / knee 1.6). Its cost: speed error to 0.5 m/s; every leg's
@@ -91,6 +91,9 @@ class TrotDesign:
     vm: float = 6.6
     """theta_dot_MAX, rad/s (Eq. 10): the servo's no-load speed (6.6: the shipped MX-64; a
     faster servo, ``robot.variants.servo_speed``, needs its figure here)."""
+    vg: float = 20.0
+    """Roll reflex gain, 1/s (``Gait.vestibular_gain``; the env v3 default: 20, chosen on
+    training trials, ``docs/locomotion.md``; 0 is the v2 gait)."""
     ph: float = -0.8963
     """Front hip posture, rad."""
     pk: float = 1.4801
@@ -172,6 +175,7 @@ def build(p: TrotDesign) -> Gait:
         tau_f=p.tf,
         acc_max=p.am,
         vel_max=p.vm,
+        vestibular_gain=p.vg,
         k_rest=p.kr,
         d_rest=2.0 * p.zeta * float(np.sqrt(p.kr)),
         name="hand-designed walk" if p.walk else "hand-designed trot",

@@ -1,6 +1,6 @@
 """Fig. 9 reproduction: node density on a suddenly appearing obstacle, DD-GNG against GNG.
 
-The robot trots in ``NeuroCog/Walk-v2``; after ``--appear`` s a wooden block (the paper's: 6–8 cm
+The robot trots in ``NeuroCog/Walk-v3``; after ``--appear`` s a wooden block (the paper's: 6–8 cm
 high, 5–12 cm long, 10–30 cm wide) appears 0.7–0.9 m ahead. Its four ToF sensors (45 fps) feed the
 same frames to two attention pipelines, DD-GNG (attention on) and plain GNG (attention off), each
 running one learning cycle + affordance detection per 0.01 s control cycle, as the obstacle envs do

@@ -1,6 +1,6 @@
 """How well a gait takes a high step or a step over: falls while front swings are lifted.
 
-On ``NeuroCog/Walk-v2`` (no obstacle), from 2 s on every ``--every``-th swing of each leg in
+On ``NeuroCog/Walk-v3`` (no obstacle), from 2 s on every ``--every``-th swing of each leg in
 ``--legs`` is a high step: knee interrupt ``--knee`` and hip interrupt ``--hip`` from the
 swing's start until its sole is ``--height`` up (what a step over a 6-8 cm block asks of the
 leg). Then, by default, the CPG's swing again; with ``--carry S`` a step over instead: hip -1
@@ -39,7 +39,7 @@ def walk(
 
     import neurocog_gym  # noqa: F401  (registers the ids)
 
-    env = gym.make("NeuroCog/Walk-v2")
+    env = gym.make("NeuroCog/Walk-v3")
     obs, _ = env.reset(seed=seed)
     u = env.unwrapped
     radius = 0.018

@@ -1,6 +1,6 @@
 """Fig. 18: foot heights around a sudden obstacle, with and without the AEF.
 
-Runs the same ``NeuroCog/SuddenObstacle-v2`` trial (same seed, so the same block appears at the
+Runs the same ``NeuroCog/SuddenObstacle-v3`` trial (same seed, so the same block appears at the
 same moment) once per policy and plots the height of each front foot's sole over time, with the
 obstacle's appearance and height marked, the effectivity's interrupt phases and the AEF fit's
 stop / side-step / pass states (``locomotion/avoidance.py``, run by the policy) shaded, and, on

@@ -1,6 +1,6 @@
 """Render one frame of an obstacle env with the attention graph drawn in (the README picture).
 
-Usage: python scripts/render_frame.py [--env NeuroCog/StaticObstacle-v2] [--seed 1]
+Usage: python scripts/render_frame.py [--env NeuroCog/StaticObstacle-v3] [--seed 1]
        [--steps 60] [--camera overhead] [--out docs/img/attention_frame.png]
 """
 
@@ -15,7 +15,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 @dataclass
 class Args:
-    env: str = "NeuroCog/StaticObstacle-v2"
+    env: str = "NeuroCog/StaticObstacle-v3"
     seed: int = 1
     steps: int = 60
     camera: str = "overhead"

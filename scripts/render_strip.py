@@ -1,6 +1,6 @@
 """A picture strip of the AEF (or the shipped PPO policy) on a sudden block, or on stepping stones.
 
-One seeded ``NeuroCog/SuddenObstacle-v2`` episode under ``--policy aef`` (the fit and the AEF
+One seeded ``NeuroCog/SuddenObstacle-v3`` episode under ``--policy aef`` (the fit and the AEF
 network on the observation; its stop / side-step / pass comes from the fit's provision teacher,
 ``locomotion/avoidance.py``), rendered with
 the attention graph, facets and footholds drawn in; four frames side by side: trotting just
@@ -13,7 +13,7 @@ before the block appears, the back-off under way, the first frame of the side st
 The matching video:
 ``neurocog record-video --policy aef --seed 1 --out docs/img/aef_sudden.mp4``.
 
-``--env stones``: one ``NeuroCog/SteppingStones-v2`` episode instead, four frames evenly spaced
+``--env stones``: one ``NeuroCog/SteppingStones-v3`` episode instead, four frames evenly spaced
 from the start to the episode's end (a foot in the pit, a fall, across or the time limit); each
 predicted foothold is drawn green where the map shows level support under it and no block is
 in the way (``foothold_safe``, Video S2's circles), red otherwise:
@@ -45,7 +45,7 @@ def main(argv: list[str] | None = None) -> None:
                     help="controller (blind and oracle: four frames evenly spaced from the "
                          "block's appearance to 1.2 s later)")  # fmt: skip
     ap.add_argument("--env", default="sudden", choices=("sudden", "stones"),
-                    help="SuddenObstacle-v2 or SteppingStones-v2")  # fmt: skip
+                    help="SuddenObstacle-v3 or SteppingStones-v3")  # fmt: skip
     ap.add_argument("--seed", type=int, default=1, help="episode seed")
     ap.add_argument("--width", type=int, default=400, help="width of one frame, pixels")
     ap.add_argument("--height", type=int, default=360, help="frame height, pixels")
@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     policy = make_policy(args.policy)
     env = gym.make(
-        "NeuroCog/SuddenObstacle-v2" if args.env == "sudden" else "NeuroCog/SteppingStones-v2",
+        "NeuroCog/SuddenObstacle-v3" if args.env == "sudden" else "NeuroCog/SteppingStones-v3",
         render_mode="rgb_array",
         width=args.width,
         height=args.height,

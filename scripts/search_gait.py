@@ -1,7 +1,7 @@
 """The local random search that found body v1's trot numbers (``scripts/design_gait.py``).
 
 Each candidate is a ``TrotDesign`` (design_gait.py) with one or two numbers multiplied by
-``1 + N(0, sigma)``; it walks ``--seconds`` on ``NeuroCog/Walk-v2`` (zero action) for each of
+``1 + N(0, sigma)``; it walks ``--seconds`` on ``NeuroCog/Walk-v3`` (zero action) for each of
 ``--seeds`` seeds, the first 2 s left out, and is kept when its cost is lower. Cost per seed:
 
 * 100 for a fall, plus 10 per second it fell short;

@@ -9,7 +9,7 @@ settled) to the RSS at the end. For the obstacle envs it also records the larges
 count seen against the map's ``max_nodes``.
 
 Usage:
-    python scripts/soak.py --env NeuroCog/Walk-v2 --steps 1000000 --json runs/soak/walk.json
+    python scripts/soak.py --env NeuroCog/Walk-v3 --steps 1000000 --json runs/soak/walk.json
     python scripts/soak.py --report runs/soak/*.json --out docs/generated/benchmarks_soak.md
 """
 
@@ -29,7 +29,7 @@ import numpy as np
 
 @dataclass
 class Args:
-    env: str = "NeuroCog/Walk-v2"
+    env: str = "NeuroCog/Walk-v3"
     steps: int = 1_000_000
     warmup: int = 20_000
     episode_steps: int = 1000

@@ -1,6 +1,6 @@
 """The isolated step-over probe of docs/oracle_notes.md: can a front leg clear a block cleanly?
 
-On ``NeuroCog/Walk-v2`` (trotting, no obstacle env), a block (20 cm wide, centred on the FL
+On ``NeuroCog/Walk-v3`` (trotting, no obstacle env), a block (20 cm wide, centred on the FL
 lane) is placed at a front-left lift-off with its near face ``gap`` ahead of the FL sole; from
 the lift-off the FL leg runs a scripted step-over, the other legs walk on. Prints, per case,
 the first FL geom that touched the block (and when), where the FL foot ended relative to the
@@ -135,7 +135,7 @@ def leg_ik(dx: float, dz: float) -> tuple[float, float]:
 def _lift_off(gym, seed: int, settle: float = 2.0, any_lift: bool = False) -> float:
     """Time of FL's first lift-off after ``settle`` s (sole leaving 4 mm) during a CPG swing
     (any lift-off with ``any_lift``)."""
-    env = gym.make("NeuroCog/Walk-v2")
+    env = gym.make("NeuroCog/Walk-v3")
     env.reset(seed=seed)
     u = env.unwrapped
     was_down = True
@@ -166,7 +166,7 @@ def probe(a: Args, seed: int, t_lift: float, gap: float, height: float, length: 
     from neurocog_gym.robot.obstacles import Block, ObstaclePool
 
     hold_legs = _hold_legs(a.hold_legs)
-    env = gym.make("NeuroCog/Walk-v2")
+    env = gym.make("NeuroCog/Walk-v3")
     env.reset(seed=seed)
     u = env.unwrapped
     m, d, r = u.model, u.data, u.robot

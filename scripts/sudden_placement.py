@@ -1,4 +1,4 @@
-"""Where the sudden block appears relative to the foot it is meant for (SuddenObstacle-v2).
+"""Where the sudden block appears relative to the foot it is meant for (SuddenObstacle-v3).
 
 For ``--trials`` benchmark trials (the seeds ``neurocog bench --seed S`` uses), runs the blind
 trot up to the block's appearance and prints percentiles of the gap from the swinging sole to
@@ -31,7 +31,7 @@ def main(argv: list[str] | None = None) -> None:
     import neurocog_gym  # noqa: F401  (registers the ids)
     from neurocog_gym.bench.runner import trial_seed
 
-    env = gym.make("NeuroCog/SuddenObstacle-v2", privileged=True)
+    env = gym.make("NeuroCog/SuddenObstacle-v3", privileged=True)
     gaps, heights = [], []
     for i in range(a.trials):
         obs, _ = env.reset(seed=trial_seed(a.seed, "sudden", i))

@@ -1,4 +1,4 @@
-"""PPO (stable-baselines3) on NeuroCog/SuddenObstacle-v2: vectorised envs, TensorBoard, checkpoints.
+"""PPO (stable-baselines3) on NeuroCog/SuddenObstacle-v3: vectorised envs, TensorBoard, checkpoints.
 
 The agent acts where the paper's AEF acts (15 values: 12 joint interrupts, 3 walking
 provisions); the CPG keeps walking underneath, so the policy starts near "all zeros" (a small
@@ -51,7 +51,7 @@ from neurocog_gym.bench.machine import field_doc
 class Args:
     """Command-line arguments (``--name-with-dashes``)."""
 
-    env_id: str = "NeuroCog/SuddenObstacle-v2"
+    env_id: str = "NeuroCog/SuddenObstacle-v3"
     """Gymnasium id to train on."""
     total_steps: int = 200_000
     """Env steps in all (over every env), resumed runs included."""

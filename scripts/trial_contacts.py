@@ -1,7 +1,7 @@
 """Which part of the robot meets a sudden block first, and when: one line per trial.
 
 For each sudden trial (the benchmark's trial seeds, ``trial_seed(seed, "sudden", i)``) the
-script runs a policy on ``NeuroCog/SuddenObstacle-v2`` (privileged, so the oracle can run) and
+script runs a policy on ``NeuroCog/SuddenObstacle-v3`` (privileged, so the oracle can run) and
 prints the first robot geoms in contact with a block, each with the time from the block's
 appearance, and the trial's outcome flags; the last lines count first contacts by body part and
 within ``--early`` seconds of the appearance. ``NEUROCOG_ASSETS`` selects the body and gait, as
@@ -33,7 +33,7 @@ def first_contacts(env, policy, seed: int, horizon: float | None = None) -> dict
     """Run one sudden trial and return its first block contacts and outcome.
 
     Args:
-        env: a ``NeuroCog/SuddenObstacle-v2`` env made with ``privileged=True``.
+        env: a ``NeuroCog/SuddenObstacle-v3`` env made with ``privileged=True``.
         policy: ``policy(obs) -> action``.
         seed: the env seed of the trial.
         horizon: stop this many simulated seconds after the appearance (None: the episode's end).
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     if args.trials < 1:
         ap.error(f"--trials must be at least 1, got {args.trials}")
-    env = gym.make("NeuroCog/SuddenObstacle-v2", privileged=True)
+    env = gym.make("NeuroCog/SuddenObstacle-v3", privileged=True)
     policy = make_policy(args.policy)
     firsts, parts, outcomes = [], Counter(), Counter()
     for i in range(args.first, args.first + args.trials):

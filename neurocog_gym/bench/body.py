@@ -2,7 +2,7 @@
 
 ``body_figures`` reads the compiled model (segment lengths, masses, hip height in the home pose,
 servo constants). ``interrupt_lift_sweep`` measures the short-term authority the motor-neuron
-pools give an interrupt (issue 21's target): the robot trots on ``NeuroCog/Walk-v2`` with the
+pools give an interrupt (issue 21's target): the robot trots on ``NeuroCog/Walk-v3`` with the
 shipped gait; at a chosen delay after a front leg's lift-off the lift interrupt (:data:`LIFT`:
 knee +1, hip +0.3 on that leg, every other entry 0) is applied and held, and the sole's height
 above the floor (the foot sphere's lowest point) is recorded for ``window`` seconds.
@@ -123,7 +123,7 @@ def interrupt_lift_sweep(
     window: float = 0.15,
     lift_height: float = 0.11,
     settle: float = 2.0,
-    env_id: str = "NeuroCog/Walk-v2",
+    env_id: str = "NeuroCog/Walk-v3",
 ) -> list[LiftRow]:
     """Apply the lift interrupt at each phase of front swings; one row per interrupt.
 

@@ -32,7 +32,7 @@ import numpy as np
 OUTCOMES: tuple[str, ...] = ("success", "touch", "fail")
 SCENARIOS: tuple[str, ...] = ("sudden", "static")
 STONE_SCENARIOS: tuple[str, ...] = ("stones", "stones-moving")
-"""``NeuroCog/SteppingStones-v2`` still and moving: success = crossed without a foot in the pit,
+"""``NeuroCog/SteppingStones-v3`` still and moving: success = crossed without a foot in the pit,
 fail = a foot in the pit, a fall, or not across in time (defined exactly in
 :class:`neurocog_gym.envs.stones.SteppingStonesEnv`); ``touch`` is never given. The paper
 reports no counts for them (no entry in :data:`PAPER_TABLE4`)."""

@@ -6,9 +6,9 @@ Used by ``scripts/fig9_density.py``, ``attention_timing.py``, ``plot_similarity.
 Two kinds of scene, both in the robot's own MuJoCo world (``assets/scene.xml``) and sensed by
 the robot's four ToF sensors (:class:`neurocog_gym.robot.tof.ToFArray`) at their frame rate:
 
-* :func:`walking_trial` — the robot trots in ``NeuroCog/Walk-v2`` (zero action = plain CPG
+* :func:`walking_trial` — the robot trots in ``NeuroCog/Walk-v3`` (zero action = plain CPG
   walking); after ``t_appear`` seconds a wooden block appears ahead of it (a mocap block of
-  :class:`~neurocog_gym.robot.obstacles.ObstaclePool`, as in ``SuddenObstacle-v2``). Several
+  :class:`~neurocog_gym.robot.obstacles.ObstaclePool`, as in ``SuddenObstacle-v3``). Several
   attention pipelines (DD-GNG, GNG, ...) are fed the *same* frames; each control cycle
   (0.01 s) every pipeline runs one learning cycle on the latest frame and detects affordances,
   exactly as ``envs/obstacle.py`` does (``per_frame=True`` variants learn only when a new
@@ -301,7 +301,7 @@ def walking_trial(
     Returns:
         The :class:`TrialResult`.
     """
-    env = gym.make("NeuroCog/Walk-v2")
+    env = gym.make("NeuroCog/Walk-v3")
     env.reset(seed=seed)
     u = env.unwrapped
     rng = np.random.default_rng(seed)
@@ -410,7 +410,7 @@ class StaticScene:
     """
 
     def __init__(self, tof: ToFParams | None = None, seed: int = 0) -> None:
-        self.env = gym.make("NeuroCog/Walk-v2")
+        self.env = gym.make("NeuroCog/Walk-v3")
         self.env.reset(seed=seed)
         self.u = self.env.unwrapped
         self.model, self.data = self.u.model, self.u.data

@@ -487,7 +487,7 @@ def write_report(
     md += [
         "Our trials in simulation (MuJoCo) beside the paper's. **The paper's counts come from a "
         "real robot** (50 trials per scenario, objects placed by hand); ours from the "
-        "`NeuroCog/SuddenObstacle-v2` and `NeuroCog/StaticObstacle-v2` envs, so the comparison "
+        "`NeuroCog/SuddenObstacle-v3` and `NeuroCog/StaticObstacle-v3` envs, so the comparison "
         "is of the method, not of the numbers' conditions.",
         "",
         "Runs:",

@@ -54,10 +54,10 @@ from neurocog_gym.bench.report import write_report
 from neurocog_gym.robot.model import BODIES
 
 ENV_IDS: dict[str, str] = {
-    "sudden": "NeuroCog/SuddenObstacle-v2",
-    "static": "NeuroCog/StaticObstacle-v2",
-    "stones": "NeuroCog/SteppingStones-v2",
-    "stones-moving": "NeuroCog/SteppingStones-v2",
+    "sudden": "NeuroCog/SuddenObstacle-v3",
+    "static": "NeuroCog/StaticObstacle-v3",
+    "stones": "NeuroCog/SteppingStones-v3",
+    "stones-moving": "NeuroCog/SteppingStones-v3",
 }
 SCENARIO_KWARGS: dict[str, dict] = {"stones-moving": {"moving": True}}
 """``gymnasium.make`` arguments of a scenario beyond its id."""
@@ -116,7 +116,7 @@ class BenchConfig:
     affordance_source: str | None = None
     """The envs' ``affordance_source``: "points", "map", or None for the env's default."""
     body: str = "v2"
-    """The robot body the envs are built with (``robot.model.BODIES``; the -v2 envs' v2)."""
+    """The robot body the envs are built with (``robot.model.BODIES``; the -v2 and -v3 envs' v2)."""
     max_seconds: float | None = None
     """Simulated seconds per trial; None: the registration's limit (sudden 7 s, static 10 s)."""
     workers: int | None = None

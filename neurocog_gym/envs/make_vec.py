@@ -36,20 +36,20 @@ def make_vector(
 
 
 def walk_vector(num_envs: int = 1, **kwargs) -> VectorEnv:
-    """Vector entry point of ``NeuroCog/Walk-v2`` (see :func:`make_vector`)."""
-    return make_vector("NeuroCog/Walk-v2", num_envs, **kwargs)
+    """Vector entry point of ``NeuroCog/Walk-v3`` (see :func:`make_vector`)."""
+    return make_vector("NeuroCog/Walk-v3", num_envs, **kwargs)
 
 
 def sudden_obstacle_vector(num_envs: int = 1, **kwargs) -> VectorEnv:
-    """Vector entry point of ``NeuroCog/SuddenObstacle-v2`` (see :func:`make_vector`)."""
-    return make_vector("NeuroCog/SuddenObstacle-v2", num_envs, **kwargs)
+    """Vector entry point of ``NeuroCog/SuddenObstacle-v3`` (see :func:`make_vector`)."""
+    return make_vector("NeuroCog/SuddenObstacle-v3", num_envs, **kwargs)
 
 
 def static_obstacle_vector(num_envs: int = 1, **kwargs) -> VectorEnv:
-    """Vector entry point of ``NeuroCog/StaticObstacle-v2`` (see :func:`make_vector`)."""
-    return make_vector("NeuroCog/StaticObstacle-v2", num_envs, **kwargs)
+    """Vector entry point of ``NeuroCog/StaticObstacle-v3`` (see :func:`make_vector`)."""
+    return make_vector("NeuroCog/StaticObstacle-v3", num_envs, **kwargs)
 
 
 def stepping_stones_vector(num_envs: int = 1, **kwargs) -> VectorEnv:
-    """Vector entry point of ``NeuroCog/SteppingStones-v2`` (see :func:`make_vector`)."""
-    return make_vector("NeuroCog/SteppingStones-v2", num_envs, **kwargs)
+    """Vector entry point of ``NeuroCog/SteppingStones-v3`` (see :func:`make_vector`)."""
+    return make_vector("NeuroCog/SteppingStones-v3", num_envs, **kwargs)

@@ -1,6 +1,6 @@
 """ObstacleEnv: QuadrupedEnv plus the eyes, the attention loop, the effectivity and the outcome.
 
-Shared by ``NeuroCog/SuddenObstacle-v2`` and ``NeuroCog/StaticObstacle-v2``. Every control cycle:
+Shared by ``NeuroCog/SuddenObstacle-v3`` and ``NeuroCog/StaticObstacle-v3``. Every control cycle:
 the physics steps; the four ToF sensors cast a frame when one is due (their frame rate); the
 attention pipeline runs one DD-GNG learning cycle on the latest frame and detects affordances;
 the effectivity predicts footholds and swing paths against the perceived obstacle boxes.

@@ -14,7 +14,7 @@ of SB3's ``DummyVecEnv`` on the same env factories (``tests/ecosystem/test_spin_
     from stable_baselines3.common.env_util import make_vec_env
     from neurocog_gym.envs.sb3_vec import SpinVecEnv
 
-    venv = make_vec_env("NeuroCog/SuddenObstacle-v2", n_envs=2, seed=0, vec_env_cls=SpinVecEnv)
+    venv = make_vec_env("NeuroCog/SuddenObstacle-v3", n_envs=2, seed=0, vec_env_cls=SpinVecEnv)
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""NeuroCog/StaticObstacle-v2: wooden blocks lie across the robot's path (§6.5.2)."""
+"""NeuroCog/StaticObstacle-v3: wooden blocks lie across the robot's path (§6.5.2)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ class StaticObstacleEnv(SuddenObstacleEnv):
     within ±``lateral`` of the path; each further block follows 0.5-0.9 m after the previous one,
     with the same lateral spread. Heights are the paper's 6, 7, 8 cm (±5 mm), lengths 5-12 cm,
     widths 10-30 cm, yaw within ±0.3 rad. Spaces, rewards and outcome as
-    ``NeuroCog/SuddenObstacle-v2``; truncated at 1000 steps (10 s) by the registration.
+    ``NeuroCog/SuddenObstacle-v3``; truncated at 1000 steps (10 s) by the registration.
 
     Arguments: as ``SuddenObstacleEnv`` (its sudden-obstacle arguments are unused) plus
     ``n_blocks`` ((1, 3), inclusive range), ``first_distance`` ((0.7, 1.2) m) and

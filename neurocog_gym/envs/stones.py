@@ -1,4 +1,4 @@
-"""NeuroCog/SteppingStones-v2: flat stones over a pit, where the footing position decides (§6.4).
+"""NeuroCog/SteppingStones-v3: flat stones over a pit, where the footing position decides (§6.4).
 
 The paper's Supplementary Videos S2 and S3 (§6.4): the affordance marks where the next step
 would land, green when the area is safe and red when it is not, and the robot steps onto the
@@ -121,12 +121,12 @@ class SteppingStonesEnv(ObstacleEnv):
 
     ## Action space
 
-    As ``NeuroCog/Walk-v2``: ``Box(-1, 1, (15,), float32)``, 12 joint interrupts and 3 walking
+    As ``NeuroCog/Walk-v3``: ``Box(-1, 1, (15,), float32)``, 12 joint interrupts and 3 walking
     provisions; all zeros is plain CPG walking.
 
     ## Observation space
 
-    The keys of ``NeuroCog/StaticObstacle-v2`` (same observation modes; the block keys stay,
+    The keys of ``NeuroCog/StaticObstacle-v3`` (same observation modes; the block keys stay,
     and are empty unless the map reports an object), plus:
 
     | key | shape | meaning |
@@ -141,7 +141,7 @@ class SteppingStonesEnv(ObstacleEnv):
 
     ## Rewards
 
-    As ``NeuroCog/Walk-v2``, plus ``reward_pass`` = +100 on the step that completes the
+    As ``NeuroCog/Walk-v3``, plus ``reward_pass`` = +100 on the step that completes the
     crossing (as the obstacle envs' pass bonus: the episode ends there).
 
     ## Episode end and outcome (``info["outcome"]``)

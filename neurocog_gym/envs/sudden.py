@@ -1,4 +1,4 @@
-"""NeuroCog/SuddenObstacle-v2: a wooden block appears in a front leg's swing path (§6.5.1)."""
+"""NeuroCog/SuddenObstacle-v3: a wooden block appears in a front leg's swing path (§6.5.1)."""
 
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ class SuddenObstacleEnv(ObstacleEnv):
 
     ## Action space, observation space
 
-    As ``NeuroCog/Walk-v2`` (15-value AEF output layer), plus these observation keys. Every
+    As ``NeuroCog/Walk-v3`` (15-value AEF output layer), plus these observation keys. Every
     key is 1-D (tables are flattened row by row; ``reshape`` gives them back), so
     stable-baselines3's ``check_env`` is silent and its ``MultiInputPolicy`` takes them as they
     are. They are what the perception and the effectivity compute (§4.2.3), never a decision:
@@ -75,7 +75,7 @@ class SuddenObstacleEnv(ObstacleEnv):
 
     ## Rewards
 
-    As ``NeuroCog/Walk-v2``, plus ``reward_touch`` = -``touch_cost`` (default 1) on each new
+    As ``NeuroCog/Walk-v3``, plus ``reward_touch`` = -``touch_cost`` (default 1) on each new
     contact with an obstacle and
     ``reward_pass`` = +100 when the robot passes (the episode ends there; 100 = 1 / (1 - 0.99)
     stands in for the walk that would follow, see ``_reward``).

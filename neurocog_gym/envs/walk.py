@@ -1,4 +1,4 @@
-"""NeuroCog/Walk-v2: the quadruped trots on flat ground on its CPG (SPEC §9)."""
+"""NeuroCog/Walk-v3: the quadruped trots on flat ground on its CPG (SPEC §9)."""
 
 from __future__ import annotations
 

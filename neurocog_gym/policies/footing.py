@@ -3,7 +3,7 @@
 The paper's second use of the interrupt (§6.4, Supplementary Video S2: "the robot will step the
 green area"): the trot the CPG generates goes on, and each swing is lengthened or shortened by
 a few centimetres so that the foot lands on a stone. It is the upper-bound row of
-``NeuroCog/SteppingStones-v2`` (issue 26), not the paper's controller, and it needs that env's
+``NeuroCog/SteppingStones-v3`` (issue 26), not the paper's controller, and it needs that env's
 privileged observation (``gymnasium.make(id, privileged=True)``): ``true_stones`` (the
 simulator's stone boxes) besides the ordinary ``feet``, ``cpg``, ``servo_target``,
 ``torso_quat`` and ``touch``. Nothing else of the env is read.
@@ -232,12 +232,12 @@ class FootingOracle:
     # -- the controller ------------------------------------------------------------------------
 
     def __call__(self, obs) -> np.ndarray:
-        """The action for one observation of ``NeuroCog/SteppingStones-v2`` (privileged)."""
+        """The action for one observation of ``NeuroCog/SteppingStones-v3`` (privileged)."""
         for key in REQUIRED_KEYS:
             if key not in obs:
                 raise KeyError(
                     f"FootingOracle needs the observation key {key!r}: make "
-                    "NeuroCog/SteppingStones-v2 with privileged=True (it reads the true stones)"
+                    "NeuroCog/SteppingStones-v3 with privileged=True (it reads the true stones)"
                 )
         p = self.p
         stones = np.asarray(obs["true_stones"], dtype=np.float64).reshape(-1, N_FIELDS)

@@ -35,7 +35,7 @@ far face is still ahead of the sole. If it does:
 
 A leg is released after ``max_hold`` seconds whatever its state.
 
-On ``NeuroCog/SteppingStones-v2`` (an observation with ``true_stones``) there are no blocks to
+On ``NeuroCog/SteppingStones-v3`` (an observation with ``true_stones``) there are no blocks to
 step over: the policy hands the observation to
 :class:`~neurocog_gym.policies.footing.FootingOracle`, the footing-position interrupt onto the
 true stones.

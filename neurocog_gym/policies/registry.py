@@ -30,7 +30,7 @@ def make_policy(spec: str):
     * ``"ppo"``: the shipped stable-baselines3 PPO policy (:class:`SB3Policy` on
       ``assets/ppo_sudden/model.zip`` and its observation statistics): cloned from the AEF,
       then 35 min of PPO on ``SuddenObstacle-v0`` (``assets/ppo_sudden/args.json``,
-      ``train_summary.json``; docs/generated/benchmarks_ppo.md). The v1 and v2 envs replaced v0
+      ``train_summary.json``; docs/generated/benchmarks_ppo.md). The v1 to v3 envs replaced v0
       (other bodies, 1-D observation keys), so until it is retrained (issue 24) this raises a
       ``ValueError`` that says so (:func:`shipped_ppo_env`);
     * a path ending in ``.npz``: :class:`AEFPolicy` with those weights;
@@ -51,8 +51,8 @@ def make_policy(spec: str):
         if env_id not in _registered_ids():
             raise ValueError(
                 f"the shipped PPO policy (assets/ppo_sudden) was trained on the v0 envs "
-                f"({env_id}), which v1 and v2 replaced: it must be retrained on "
-                "NeuroCog/SuddenObstacle-v2 (issue 24); give a model of your own as a .zip path"
+                f"({env_id}), which v1 to v3 replaced: it must be retrained on "
+                "NeuroCog/SuddenObstacle-v3 (issue 24); give a model of your own as a .zip path"
             )
         policy = SB3Policy(paths.asset(paths.PPO_MODEL))
         policy.name = "ppo"

@@ -7,7 +7,7 @@ model); fused here it is a few microseconds.
 
 With the walking provision and the interrupt at zero the generator's drive is
 ``g_flex * y_flexor - g_ext * y_extensor`` (the provision scales are exactly 1 and the coronal
-term exactly 0), so these kernels reproduce ``NeuroCog/Walk-v2`` bit for bit (the evaluator's
+term exactly 0), so these kernels reproduce ``NeuroCog/Walk-v3`` bit for bit (the evaluator's
 test checks that against the env) as long as the CPG stays bounded.
 """
 
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from neurocog_gym.locomotion._kernels import matsuoka_step, motor_neuron_step
+from neurocog_gym.locomotion._kernels import matsuoka_step, motor_neuron_step, vestibular_step
 
 
 @njit(cache=True)
@@ -24,7 +24,7 @@ def generator_cycle(
     qpos, qvel, sensordata, ctrl, qpos_adr, dof_adr, touch_adr, actuator, weight_per_leg,
     cpg_x, cpg_v, W, V, cpg_consts, n_sub, joint_neurons, g_flex, g_ext,
     q_ref, qd_ref, posture, motor_consts, acc_max, vel_max, fl_width, Z, q_lo, q_hi, dt,
-    zeros12, y_out, x_max, coupling, joint_lo, joint_hi, target, gain,
+    zeros12, y_out, x_max, coupling, joint_lo, joint_hi, target, gain, vest_gain, side,
 ):  # fmt: skip
     """One 0.01 s cycle of CPG (Eq. 5-7) and motor-neuron pools (Eq. 8-11); writes ``ctrl``.
 
@@ -67,6 +67,8 @@ def generator_cycle(
         target: (12,) receives the servo targets in joint angles (written to ``ctrl``).
         gain: the soft-start factor on the drive (``LocomotionGenerator``'s ``start_ramp``:
             ``elapsed / start_ramp`` during the ramp, then exactly 1).
+        vest_gain: the gait's roll reflex gain (``Gait.vestibular_gain``), 1/s; 0 skips it.
+        side: (4,) +1 for a left leg, -1 for a right one (``vestibular_step``).
 
     Returns:
         False, leaving ``ctrl`` untouched, when the CPG diverged (an inner state beyond
@@ -91,6 +93,10 @@ def generator_cycle(
         drive[i] = g_flex[i] * y[joint_neurons[i, 0]] - g_ext[i] * y[joint_neurons[i, 1]]
         if gain != 1.0:
             drive[i] *= gain
+    if vest_gain != 0.0:
+        # The free joint's angular velocity (torso frame) at the cycle's start, as the env
+        # passes it to LocomotionGenerator.step.
+        vestibular_step(qd_ref, qvel[3:6], vest_gain, side, dt)
     acc = np.empty(n)
     motor_neuron_step(
         q_ref, qd_ref, drive, zeros12, theta, theta_dot, touch, posture,

@@ -2,7 +2,7 @@
 
 The evaluator steps the MuJoCo model with the :class:`LocomotionGenerator`'s state and kernels
 directly (one fused numba call per cycle, ``_eval_kernels.py``) — no perception, no Gymnasium
-wrappers — and reproduces ``NeuroCog/Walk-v2`` with an all-zero action step for step: same scene,
+wrappers — and reproduces ``NeuroCog/Walk-v3`` with an all-zero action step for step: same scene,
 same reset (the ``home`` keyframe plus uniform joint noise, then the CPG's trot-phase start with
 its own noise, both drawn from ``numpy.random.default_rng(seed)`` in the env's order), same fall
 and physics-fault tests. The one difference: a diverging CPG ends the rollout (below), where the
@@ -44,7 +44,7 @@ import mujoco
 import numpy as np
 
 from neurocog_gym.locomotion.gait import Gait, default_gait
-from neurocog_gym.locomotion.generator import _JOINT_NEURONS, LocomotionGenerator
+from neurocog_gym.locomotion.generator import _JOINT_NEURONS, _SIDE, LocomotionGenerator
 from neurocog_gym.robot.model import FAULT_WARNINGS, GRAVITY, RobotIndex, load_model
 from neurocog_gym.train._eval_kernels import after_step, generator_cycle
 
@@ -140,12 +140,6 @@ class GaitEvaluator:
 
     def __init__(self, base_gait: Gait | None = None, params: EvalParams | None = None):
         self.base_gait = base_gait if base_gait is not None else default_gait()
-        if self.base_gait.vestibular_gain != 0.0:
-            raise ValueError(
-                f"gait {self.base_gait.name!r} has a roll reflex (vestibular_gain "
-                f"{self.base_gait.vestibular_gain}); the compiled NSGA-II rollout has none yet, "
-                "so its scores would not be the env's: tune with vestibular_gain 0"
-            )
         self.params = p = params or EvalParams()
         self.model = load_model(body=p.body)
         self.data = mujoco.MjData(self.model)
@@ -236,10 +230,11 @@ class GaitEvaluator:
         fell_at = None
         k = 0
         elapsed, ramp = 0.0, gen.prov.start_ramp
+        vest_gain = float(self.base_gait.vestibular_gain)
         for k in range(self.n_steps):
             elapsed += gen.dt  # accumulated exactly as LocomotionGenerator.step does
             gain = elapsed / ramp if elapsed < ramp else 1.0
-            if generator_cycle(*cycle_args, gain):
+            if generator_cycle(*cycle_args, gain, vest_gain, _SIDE):
                 mujoco.mj_step(m, d, nstep=nstep)
                 status, power[k], n_warn = after_step(*check_args, n_warn, *check_tail)
             else:

@@ -351,7 +351,7 @@ def test_trial_record_has_the_v1_fields():
     from neurocog_gym.bench.runner import TrialSpec, run_trial
     from neurocog_gym.policies import make_policy
 
-    env = gym.make("NeuroCog/StaticObstacle-v2", max_episode_steps=30)
+    env = gym.make("NeuroCog/StaticObstacle-v3", max_episode_steps=30)
     rec = run_trial(env, make_policy("blind"), TrialSpec("static", 0, 5))
     for key in ("outcome", "passed", "touched", "touch_events", "time_to_pass", "obstacles",
                 "knocked", "stood_on", "stepped_over", "interrupt_cycles", "provision_cycles",

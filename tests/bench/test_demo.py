@@ -18,7 +18,7 @@ def test_demo_walks_then_runs_a_short_benchmark(tmp_path, capsys):
 
 
 def test_the_walk_is_not_reported_as_a_fall_when_its_time_is_up(tmp_path):
-    """20 s is Walk-v2's registered time limit: the truncation at the end is not a fall."""
+    """20 s is Walk-v3's registered time limit: the truncation at the end is not a fall."""
     from neurocog_gym.demo import walk_demo
 
     summary = walk_demo(tmp_path, seconds=20.0, video=False)

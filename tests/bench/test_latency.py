@@ -193,7 +193,7 @@ class _Scripted:
 
 
 def test_latency_fields_on_a_short_scripted_sudden_trial():
-    env = gym.make("NeuroCog/SuddenObstacle-v2", max_episode_steps=150, appear_window=(0.4, 0.5))
+    env = gym.make("NeuroCog/SuddenObstacle-v3", max_episode_steps=150, appear_window=(0.4, 0.5))
     pol = _Scripted(env)
     rec = runner.run_trial(env, pol, runner.TrialSpec("sudden", 0, 3))
     env.close()
@@ -221,12 +221,12 @@ def test_latency_fields_on_a_short_scripted_sudden_trial():
 
 
 def test_latency_is_none_before_the_block_and_on_static_trials():
-    env = gym.make("NeuroCog/SuddenObstacle-v2", max_episode_steps=20)  # 0.2 s: no block yet
+    env = gym.make("NeuroCog/SuddenObstacle-v3", max_episode_steps=20)  # 0.2 s: no block yet
     rec = runner.run_trial(env, lambda obs: np.zeros(15, np.float32),
                            runner.TrialSpec("sudden", 0, 1))  # fmt: skip
     env.close()
     assert rec["appeared_at"] is None and rec["latency"] == runner.NO_LATENCY
-    env = gym.make("NeuroCog/StaticObstacle-v2", max_episode_steps=5)
+    env = gym.make("NeuroCog/StaticObstacle-v3", max_episode_steps=5)
     rec = runner.run_trial(env, lambda obs: np.zeros(15, np.float32),
                            runner.TrialSpec("static", 0, 1))  # fmt: skip
     env.close()

@@ -72,7 +72,7 @@ def test_step_clock_puts_later_resets_in_the_timeline():
     import gymnasium as gym
     import numpy as np
 
-    env = bench_env._StepClock(gym.make("NeuroCog/Walk-v2", max_episode_steps=3))
+    env = bench_env._StepClock(gym.make("NeuroCog/Walk-v3", max_episode_steps=3))
     env.reset(seed=0)  # the first reset is not a vector step
     for _ in range(3):
         env.step(np.zeros(15, np.float32))

@@ -10,7 +10,7 @@ SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_vec.py"
 
 def test_writes_every_row_with_machine_command_and_load(tmp_path):
     out = tmp_path / "vec.md"
-    r = subprocess.run([sys.executable, str(SCRIPT), "--ids", "NeuroCog/Walk-v2", "--ns", "2",
+    r = subprocess.run([sys.executable, str(SCRIPT), "--ids", "NeuroCog/Walk-v3", "--ns", "2",
                         "--rounds", "1", "--steps", "3", "--out", str(out)],
                        capture_output=True, text=True, timeout=600)  # fmt: skip
     assert r.returncode == 0, r.stderr

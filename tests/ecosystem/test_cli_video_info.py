@@ -52,14 +52,14 @@ def test_info_json_matches_the_registry(capsys):
         if "Obstacle" in d["id"]:
             assert {"tof", "perception", "include_graph", "warmup_cycles"} <= set(names)
         env.close()
-    static = next(d for d in descs if d["id"] == "NeuroCog/StaticObstacle-v2")
+    static = next(d for d in descs if d["id"] == "NeuroCog/StaticObstacle-v3")
     assert {"n_blocks", "first_distance", "lateral"} <= {p["name"] for p in static["parameters"]}
 
 
 def test_info_text_one_env(capsys):
-    assert cli.main(["info", "--env", "NeuroCog/Walk-v2"]) == 0
+    assert cli.main(["info", "--env", "NeuroCog/Walk-v3"]) == 0
     out = capsys.readouterr().out
-    assert "NeuroCog/Walk-v2" in out and "2000 steps" in out and "joint_pos" in out
+    assert "NeuroCog/Walk-v3" in out and "2000 steps" in out and "joint_pos" in out
     assert "make_vec(id, n): neurocog_gym.envs.make_vec:walk_vector" in out
     assert "SuddenObstacle" not in out
 
@@ -70,7 +70,7 @@ def test_record_video_walk_writes_the_frames(tmp_path, capsys):
         [
             "record-video",
             "--env",
-            "NeuroCog/Walk-v2",
+            "NeuroCog/Walk-v3",
             "--policy",
             "blind",
             "--seconds",
@@ -97,7 +97,7 @@ def test_record_video_walk_writes_the_frames(tmp_path, capsys):
 
 def test_record_video_draws_the_overlay(tmp_path):
     common = dict(
-        env_id="NeuroCog/SuddenObstacle-v2",
+        env_id="NeuroCog/SuddenObstacle-v3",
         policy="aef",
         seconds=0.05,
         seed=2,
@@ -123,8 +123,8 @@ def test_record_video_draws_the_overlay(tmp_path):
         (["--height", "abc"], ["--height"]),
         (["--fps", "500"], ["--fps", "100"]),
         (["--seconds", "-1"], ["--seconds", "positive"]),
-        (["--env", "Nope-v0"], ["unknown env id", "NeuroCog/Walk-v2"]),
-        (["--env", "NeuroCog/Walk-v2"], ["remembered_blocks", "blind"]),
+        (["--env", "Nope-v0"], ["unknown env id", "NeuroCog/Walk-v3"]),
+        (["--env", "NeuroCog/Walk-v3"], ["remembered_blocks", "blind"]),
         (["--out", "{tmp}/v.avi"], [".mp4"]),
         (["--policy", "{tmp}/missing.zip"], ["missing.zip"]),
     ],

@@ -49,8 +49,8 @@ def test_stones_strip_runs_to_the_episodes_end(tmp_path):
     assert r.returncode == 0, r.stderr
     assert iio.imread(out).shape == (120, 640, 3)
     # seed 3: the blind trot's foot goes into the pit; the last frame is that cycle's
-    assert re.search(r"frames at t = 0\.01, .*, 1\.44 s \(outcome fail, a foot in the pit at "
-                     r"1\.44 s\)", r.stdout)  # fmt: skip
+    assert re.search(r"frames at t = 0\.01, .*, 2\.24 s \(outcome fail, a foot in the pit at "
+                     r"2\.24 s\)", r.stdout)  # fmt: skip
 
 
 def test_trial_contacts_lists_each_trials_first_block_contacts():

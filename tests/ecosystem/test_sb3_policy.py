@@ -123,7 +123,7 @@ def test_shipped_ppo_policy_says_it_needs_retraining(capsys, tmp_path):
     assert shipped_ppo_env() == "NeuroCog/SuddenObstacle-v0"
     assert shipped_ppo_env() not in neurocog_gym.ENV_IDS
     with pytest.raises(
-        ValueError, match=r"trained on the v0 envs .* retrained on .*-v2 \(issue 24\)"
+        ValueError, match=r"trained on the v0 envs .* retrained on .*-v3 \(issue 24\)"
     ):
         make_policy("ppo")
     assert cli.main(["bench", "--policy", "ppo", "--trials", "1", "--workers", "1",

@@ -14,7 +14,7 @@ from gymnasium.vector import SyncVectorEnv
 import neurocog_gym
 from neurocog_gym.envs.vector import SpinVectorEnv, make_spin_vector
 
-SUDDEN = "NeuroCog/SuddenObstacle-v2"
+SUDDEN = "NeuroCog/SuddenObstacle-v3"
 
 needs_workers = pytest.mark.skipif(
     len(os.sched_getaffinity(0)) < 2,
@@ -485,7 +485,7 @@ def test_workers_leave_when_the_vector_env_process_dies(tmp_path, context):
         "import os, sys, numpy as np, gymnasium as gym\n"
         "from neurocog_gym.envs.vector import SpinVectorEnv\n"
         "def make():\n"
-        "    return gym.make('NeuroCog/Walk-v2')\n"
+        "    return gym.make('NeuroCog/Walk-v3')\n"
         "if __name__ == '__main__':\n"
         f"    v = SpinVectorEnv([make, make], context={context!r})\n"
         "    v.reset(seed=0)\n"
@@ -536,7 +536,7 @@ def test_ctrl_c_stops_the_workers_without_their_tracebacks(tmp_path):
         "import signal, numpy as np, gymnasium as gym\n"
         "from neurocog_gym.envs.vector import SpinVectorEnv\n"
         "def make():\n"
-        "    return gym.make('NeuroCog/Walk-v2')\n"
+        "    return gym.make('NeuroCog/Walk-v3')\n"
         "if __name__ == '__main__':\n"
         "    signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "    v = SpinVectorEnv([make, make])\n"

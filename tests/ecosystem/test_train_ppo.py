@@ -211,7 +211,7 @@ def test_behaviour_cloning_fits_the_aef_actions_and_the_returns():
     import neurocog_gym  # noqa: F401  (registers the ids)
 
     mod = _module()
-    real = DummyVecEnv([lambda: gym.make("NeuroCog/SuddenObstacle-v2")])
+    real = DummyVecEnv([lambda: gym.make("NeuroCog/SuddenObstacle-v3")])
     space = real.observation_space
     fake = _ScriptedVec(space, n=2)
     # The recorded returns, by hand: reward 1, episodes of 4 steps, gamma 0.5 -> 1.875, 1.75,

@@ -45,7 +45,7 @@ def test_make_vec_sync_and_async_agree(env_id):
 SB3_CASES = [(i, {}) for i in IDS] + [
     (i, {"include_graph": True, "graph_max_nodes": 64, "graph_max_edges": 128})
     for i in IDS
-    if i != "NeuroCog/Walk-v2"
+    if i != "NeuroCog/Walk-v3"
 ]
 
 

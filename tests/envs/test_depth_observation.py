@@ -12,8 +12,8 @@ from neurocog_gym.envs.obstacle import DEPTH_HEIGHT, DEPTH_RANGE, DEPTH_WIDTH
 from neurocog_gym.robot.obstacles import Block
 from neurocog_gym.robot.tof import ToFParams
 
-SUDDEN = "NeuroCog/SuddenObstacle-v2"
-STATIC = "NeuroCog/StaticObstacle-v2"
+SUDDEN = "NeuroCog/SuddenObstacle-v3"
+STATIC = "NeuroCog/StaticObstacle-v3"
 OBSTACLE_IDS = [SUDDEN, STATIC]
 DEPTH_MODES = ["depth", "depth_only"]
 ZERO = np.zeros(15, np.float32)

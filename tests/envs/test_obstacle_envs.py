@@ -7,8 +7,8 @@ import neurocog_gym  # noqa: F401
 from neurocog_gym.perception.pipeline import PipelineParams
 from neurocog_gym.robot.obstacles import Block
 
-SUDDEN = "NeuroCog/SuddenObstacle-v2"
-STATIC = "NeuroCog/StaticObstacle-v2"
+SUDDEN = "NeuroCog/SuddenObstacle-v3"
+STATIC = "NeuroCog/StaticObstacle-v3"
 
 
 def _walk_until(env, cond, max_steps=700):
@@ -212,7 +212,7 @@ def test_env_pipeline_drops_the_raw_point_additions_it_never_reads(noise):
 
     tof = ToFParams(backend="numba", noise_std_rel=noise)
     given = PipelineParams(gng="gng", refine_noise=True, view_wall_width=0.3)
-    env = gym.make("NeuroCog/StaticObstacle-v2", tof=tof, perception=given)
+    env = gym.make("NeuroCog/StaticObstacle-v3", tof=tof, perception=given)
     p = env.unwrapped.pipeline.params
     assert p.view_wall_width == 0.0  # no walls in the scene; wall labels reach nothing
     assert p.refine_noise is (noise > 0)  # a noise-free frame has no noise to take out

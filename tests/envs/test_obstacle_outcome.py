@@ -13,8 +13,8 @@ import neurocog_gym  # noqa: F401
 from neurocog_gym.envs.obstacle import OutcomeParams
 from neurocog_gym.robot.obstacles import Block
 
-STATIC = "NeuroCog/StaticObstacle-v2"
-SUDDEN = "NeuroCog/SuddenObstacle-v2"
+STATIC = "NeuroCog/StaticObstacle-v3"
+SUDDEN = "NeuroCog/SuddenObstacle-v3"
 
 
 @pytest.fixture(scope="module")

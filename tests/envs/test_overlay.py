@@ -72,7 +72,7 @@ def test_rgb_frame_shows_the_facets():
 
     frames = {}
     for overlay in (True, False):
-        env = gym.make("NeuroCog/StaticObstacle-v2", render_mode="rgb_array", width=160,
+        env = gym.make("NeuroCog/StaticObstacle-v3", render_mode="rgb_array", width=160,
                        height=120, camera_name="overhead", draw_overlay=overlay)  # fmt: skip
         env.reset(seed=1)
         for _ in range(5):

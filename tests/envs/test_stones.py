@@ -1,4 +1,4 @@
-"""NeuroCog/SteppingStones-v2 (neurocog_gym/envs/stones.py, robot/stones.py): course, outcome,
+"""NeuroCog/SteppingStones-v3 (neurocog_gym/envs/stones.py, robot/stones.py): course, outcome,
 observation, determinism, errors, benchmark scenarios.
 
 The registered id also runs through the parametrized checks of test_conformance.py,
@@ -24,7 +24,7 @@ from neurocog_gym.robot.stones import (
     draw_course,
 )
 
-STONES = "NeuroCog/SteppingStones-v2"
+STONES = "NeuroCog/SteppingStones-v3"
 ZERO = np.zeros(15, np.float32)
 # Rows of touching 25 cm stones under both tracks: no gap anywhere, the blind trot crosses.
 GAPLESS = CourseParams(gap=(0.0, 0.0), lateral=0.0, stone_size=(0.25, 0.25))
@@ -75,7 +75,7 @@ def test_sb3_check_env_is_silent(kwargs, check_env_silently):
 
 def test_observation_keys_are_the_obstacle_envs_plus_support():
     stones = gym.make(STONES, privileged=True)
-    static = gym.make("NeuroCog/StaticObstacle-v2", privileged=True)
+    static = gym.make("NeuroCog/StaticObstacle-v3", privileged=True)
     s, o = set(stones.observation_space.spaces), set(static.observation_space.spaces)
     assert s - o == {"foothold_supported", "true_stones"} and o <= s
     assert stones.action_space == static.action_space
@@ -400,7 +400,7 @@ def test_overlay_footholds_are_green_where_the_observation_says_safe(env):
         seen_green += int(is_green.sum())
         seen_red += int((~is_green).sum())
     assert seen_green > 0 and seen_red > 0  # both colours occur on a course
-    obstacle = gym.make("NeuroCog/StaticObstacle-v2")
+    obstacle = gym.make("NeuroCog/StaticObstacle-v3")
     obstacle.reset(seed=0)
     for _ in range(60):
         obs, *_ = obstacle.step(ZERO)

@@ -8,7 +8,7 @@ import pytest
 import neurocog_gym
 from neurocog_gym.robot.model import RobotIndex, load_model
 
-WALK = "NeuroCog/Walk-v2"
+WALK = "NeuroCog/Walk-v3"
 
 
 def rollout(env, seed, steps, action_seed=None):
@@ -160,5 +160,5 @@ def test_unknown_camera_name_is_a_clear_error():
     with pytest.raises(
         ValueError, match="unknown camera_name 'nosuchcam': the scene's cameras are .*follow"
     ):
-        gym.make("NeuroCog/Walk-v2", camera_name="nosuchcam")
-    gym.make("NeuroCog/Walk-v2", camera_name=None).close()  # the free camera stays available
+        gym.make("NeuroCog/Walk-v3", camera_name="nosuchcam")
+    gym.make("NeuroCog/Walk-v3", camera_name=None).close()  # the free camera stays available

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from neurocog_gym.locomotion._kernels import drive_kernel
+from neurocog_gym.locomotion._kernels import drive_kernel, vestibular_step
 from neurocog_gym.locomotion.avoidance import sag_for_stride
 from neurocog_gym.locomotion.gait import default_gait
 from neurocog_gym.locomotion.generator import (
@@ -57,21 +57,23 @@ def test_a_brake_command_is_followed_fast_and_a_slow_down_slowly():
     zeros = np.zeros(12)
     p = ProvisionParams()
     # Brake: a = dt / brake_tau = 1, the command is taken at once.
-    gen.step(np.array([-1.0, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
+    gen.step(np.array([-1.0, 0.0, 0.0]), zeros, theta, zeros, np.ones(4), np.zeros(3))
     assert gen.provision[0] == -1.0
     # Released: the brake's filter follows until s_SAG is back above brake_from (-1 -> 0.0 at
     # once), then the medium-term one.
-    gen.step(np.array([0.0, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
+    gen.step(np.array([0.0, 0.0, 0.0]), zeros, theta, zeros, np.ones(4), np.zeros(3))
     assert gen.provision[0] == 0.0
     # A slow-down above brake_from keeps the medium-term filter: a = dt / provision_tau = 0.02.
     gen.reset(np.random.default_rng(0))
-    gen.step(np.array([-0.3, 0.0, 0.0]), zeros, theta, zeros, np.ones(4))
+    gen.step(np.array([-0.3, 0.0, 0.0]), zeros, theta, zeros, np.ones(4), np.zeros(3))
     assert gen.provision[0] == pytest.approx(-0.3 * 0.01 / p.provision_tau)
 
 
 def test_the_compiled_cycle_is_the_separate_steps_bit_for_bit():
-    """``LocomotionGenerator.step`` (one call) against the CPG, drive and pool steps in turn."""
+    """``LocomotionGenerator.step`` (one call) against the CPG, drive, reflex and pool steps in
+    turn (the shipped gait has the roll reflex, v3)."""
     gait = default_gait()
+    assert gait.vestibular_gain > 0.0
     lo, hi = np.full(12, -2.5), np.full(12, 2.5)
     kb = np.array([True, False, True, False])
     fused = LocomotionGenerator(gait, lo, hi, dt=0.01, knee_behind=kb)
@@ -84,7 +86,8 @@ def test_the_compiled_cycle_is_the_separate_steps_bit_for_bit():
         interrupt = rng.uniform(-1, 1, 12) * (i % 5 == 0)
         theta, theta_dot = rng.normal(size=12), rng.normal(size=12)
         touch = rng.uniform(0, 2, 4)
-        out = fused.step(provision, interrupt, theta, theta_dot, touch).copy()
+        gyro = rng.normal(size=3)
+        out = fused.step(provision, interrupt, theta, theta_dot, touch, gyro).copy()
         # The separate steps, as LocomotionGenerator.step ran them before the fused kernel.
         p = ref.prov
         command = np.asarray(provision, dtype=np.float64)
@@ -103,6 +106,7 @@ def test_the_compiled_cycle_is_the_separate_steps_bit_for_bit():
         ref.elapsed += ref.dt
         if ref.elapsed < p.start_ramp:
             ref.drive *= ref.elapsed / p.start_ramp
+        vestibular_step(ref.pools.qd_ref, gyro, gait.vestibular_gain, _SIDE, ref.dt)
         expect = ref.pools.step(ref.drive, interrupt, theta, theta_dot, touch)
         assert out.tobytes() == expect.tobytes()
         for name in ("provision", "drive", "hip_drive"):

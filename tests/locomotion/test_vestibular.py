@@ -38,15 +38,18 @@ def _run(gait, gyro, cycles=30):
     return out
 
 
+def test_the_shipped_gait_has_the_reflex():
+    assert default_gait().vestibular_gain == 20.0  # env v3 (CHANGELOG)
+
+
 def test_a_zero_gain_leaves_the_cycle_bit_for_bit():
-    gait = default_gait()
-    assert gait.vestibular_gain == 0.0
+    gait = replace(default_gait(), vestibular_gain=0.0)
     spin = np.array([5.0, -1.0, 0.5])
     assert np.array_equal(_run(gait, spin), _run(gait, None))
 
 
 def test_a_gain_bends_the_targets_the_reflex_way():
-    gait = default_gait()
+    gait = replace(default_gait(), vestibular_gain=0.0)
     roll = np.array([1.0, 0.0, 0.0])  # right side sinking throughout
     base = _run(gait, roll)
     bent = _run(replace(gait, vestibular_gain=15.0), roll)
@@ -80,8 +83,14 @@ def test_the_gain_round_trips_through_the_file_and_old_files_read_as_zero(tmp_pa
     assert Gait.load(tmp_path / "old.json").vestibular_gain == 0.0
 
 
-def test_the_nsga_rollout_refuses_a_reflex_gait():
-    from neurocog_gym.train.evaluate import GaitEvaluator
+def test_the_nsga_rollout_carries_the_reflex():
+    """The compiled rollout runs the reflex as the env does (tests/train/test_nsga.py checks the
+    shipped reflex gait against a Walk env rollout): with the gain at 0 the walk differs."""
+    from neurocog_gym.train.evaluate import EvalParams, GaitEvaluator
 
-    with pytest.raises(ValueError, match="roll reflex"):
-        GaitEvaluator(replace(default_gait(), vestibular_gain=5.0))
+    params = EvalParams(seconds=3.0, warmup=1.0)
+    genes = default_gait().genes_array
+    without = replace(default_gait(), vestibular_gain=0.0)
+    on = GaitEvaluator(default_gait(), params).evaluate(genes, seed=3)
+    off = GaitEvaluator(without, params).evaluate(genes, seed=3)
+    assert on.energy != off.energy and on.distance != off.distance

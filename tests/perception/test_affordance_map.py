@@ -485,18 +485,18 @@ def test_env_passes_affordance_source_through_gymnasium_make():
 
     import neurocog_gym  # noqa: F401
 
-    env = gym.make("NeuroCog/SuddenObstacle-v2", affordance_source="map")
+    env = gym.make("NeuroCog/SuddenObstacle-v3", affordance_source="map")
     try:
         assert env.unwrapped.pipeline.params.affordance_source == "map"
     finally:
         env.close()
-    env = gym.make("NeuroCog/SuddenObstacle-v2")
+    env = gym.make("NeuroCog/SuddenObstacle-v3")
     try:
         assert env.unwrapped.pipeline.params.affordance_source == "points"
     finally:
         env.close()
     with pytest.raises(ValueError, match="affordance_source"):
-        gym.make("NeuroCog/SuddenObstacle-v2", affordance_source="raw")
+        gym.make("NeuroCog/SuddenObstacle-v3", affordance_source="raw")
 
 
 @pytest.mark.slow

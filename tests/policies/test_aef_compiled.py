@@ -158,7 +158,7 @@ def test_the_compiled_cycle_gives_the_readable_paths_actions_bit_for_bit(gain, f
 
 
 def test_on_an_episode_of_the_env_too():
-    env = gym.make("NeuroCog/SuddenObstacle-v2")
+    env = gym.make("NeuroCog/SuddenObstacle-v3")
     policy, reference = AEFPolicy(), Reference()
     obs, _ = env.reset(seed=4)
     start_episode(policy, env)

@@ -121,7 +121,7 @@ def test_remembered_rows_decode_to_world_boxes():
 def test_the_policy_needs_nothing_but_the_observation():
     """Replayed on the recorded observations alone, after the episode, a fresh policy gives
     the same actions bit for bit: nothing of the env but what it observed went in."""
-    env = gym.make("NeuroCog/SuddenObstacle-v2")
+    env = gym.make("NeuroCog/SuddenObstacle-v3")
     policy = make_policy("aef")
     obs, _ = env.reset(seed=3)
     start_episode(policy, env)

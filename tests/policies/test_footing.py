@@ -167,7 +167,7 @@ def test_the_oracle_hands_the_stepping_stones_to_the_footing_oracle():
 
 
 def test_the_oracle_walks_the_stepping_stones_env():
-    env = gym.make("NeuroCog/SteppingStones-v2", privileged=True)
+    env = gym.make("NeuroCog/SteppingStones-v3", privileged=True)
     obs, _ = env.reset(seed=0)
     policy = OraclePolicy()
     policy.reset(env)

@@ -15,7 +15,7 @@ def test_make_policy_oracle_is_the_privileged_oracle():
 
 
 def test_oracle_refuses_an_observation_without_the_privileged_keys():
-    env = gym.make("NeuroCog/StaticObstacle-v2")
+    env = gym.make("NeuroCog/StaticObstacle-v3")
     obs, _ = env.reset(seed=0)
     with pytest.raises(KeyError, match="privileged=True"):
         OraclePolicy()(obs)
@@ -99,7 +99,7 @@ def test_a_step_over_past_the_cpg_swing_holds_the_legs_the_cpg_would_lift():
 
 
 def test_true_blocks_observation_gives_the_placed_blocks():
-    env = gym.make("NeuroCog/StaticObstacle-v2", privileged=True)
+    env = gym.make("NeuroCog/StaticObstacle-v3", privileged=True)
     obs, _ = env.reset(seed=3)
     u = env.unwrapped
     tb = obs["true_blocks"].reshape(-1, 7)
@@ -120,7 +120,7 @@ def test_true_blocks_observation_gives_the_placed_blocks():
 
 
 def test_oracle_acts_only_on_the_interrupt_and_sagittal_entries_within_bounds():
-    env = gym.make("NeuroCog/SuddenObstacle-v2", privileged=True)
+    env = gym.make("NeuroCog/SuddenObstacle-v3", privileged=True)
     obs, _ = env.reset(seed=1)
     policy = make_policy("oracle")
     policy.reset()

@@ -224,5 +224,5 @@ def test_an_unexpected_exception_is_one_line_unless_debugging(capsys, monkeypatc
 def test_unknown_env_id_names_the_known_ones():
     from neurocog_gym.envs.base import make_env
 
-    with pytest.raises(ValueError, match="unknown env id 'NeuroCog/Fly-v0'; known: .*Walk-v2"):
+    with pytest.raises(ValueError, match="unknown env id 'NeuroCog/Fly-v0'; known: .*Walk-v3"):
         make_env("NeuroCog/Fly-v0")

@@ -18,7 +18,7 @@ def _script(name, *args, timeout=300):
 
 def test_soak_script_and_report(tmp_path):
     js = tmp_path / "walk.json"
-    _script("soak.py", "--env", "NeuroCog/Walk-v2", "--steps", "1500", "--warmup", "500",
+    _script("soak.py", "--env", "NeuroCog/Walk-v3", "--steps", "1500", "--warmup", "500",
             "--sample-every", "250", "--episode-steps", "400", "--json", js)  # fmt: skip
     r = json.loads(js.read_text())
     assert r["steps"] == 1500 and r["episodes"] >= 4 and r["nonfinite_obs_steps"] == 0
@@ -26,7 +26,7 @@ def test_soak_script_and_report(tmp_path):
     md = tmp_path / "soak.md"
     _script("soak.py", "--report", js, "--out", md)
     text = md.read_text()
-    assert "| NeuroCog/Walk-v2 | 1,500 (1,500) |" in text and "growth" in text
+    assert "| NeuroCog/Walk-v3 | 1,500 (1,500) |" in text and "growth" in text
 
 
 def test_search_gait_script_scores_and_writes_only_improvements(tmp_path):
@@ -85,6 +85,6 @@ def test_search_gait_avoid_stats_side_steps_the_commanded_way_and_sees_a_fall():
 
     for seed in (0, 1):
         s = avoid_stats(TrotDesign(), seed)
-        assert not s["fell"] and s["side"] > 0.3 and s["heading"] < 0.2, s
+        assert not s["fell"] and s["side"] > 0.25 and s["heading"] < 0.2, s
     d = json.loads((ROOT / "docs" / "data" / "gait_long_swing_d.json").read_text())
     assert avoid_stats(dataclasses.replace(TrotDesign(), **d), 0)["fell"]

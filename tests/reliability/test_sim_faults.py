@@ -71,7 +71,7 @@ def test_fault_truncates_then_reset_is_clean(env_id, fault):
     assert trunc and not term and info["sim_unstable"] is True, (trunc, term, info)
     assert np.isfinite(r)
     assert _finite(obs) and env.observation_space.contains(obs)
-    if env_id != "NeuroCog/Walk-v2":
+    if env_id != "NeuroCog/Walk-v3":
         assert info["outcome"] == "fail"
     # A caller that ignores the truncation: step still never raises.
     for _ in range(5):

@@ -103,8 +103,8 @@ def test_kinked_assets_run_in_the_obstacle_env(tmp_path, monkeypatch):
     write_assets(kinked_shank(), tmp_path / "assets")
     monkeypatch.setenv("NEUROCOG_ASSETS", str(tmp_path / "assets"))
     with pytest.raises(ValueError, match="bent already"):  # body v2 bends the scene's shanks
-        gym.make("NeuroCog/SuddenObstacle-v2")
-    env = gym.make("NeuroCog/SuddenObstacle-v2", body="v1")  # the scene as written: bent
+        gym.make("NeuroCog/SuddenObstacle-v3")
+    env = gym.make("NeuroCog/SuddenObstacle-v3", body="v1")  # the scene as written: bent
     try:
         u = env.unwrapped
         low = [_geom(u.model, f"{p}_shank_low") for p in names.LEGS]
@@ -140,7 +140,7 @@ def test_every_env_takes_the_body(env_id):
 
 def test_body_v2_is_deterministic_and_differs_from_v1():
     def run(body):
-        env = gym.make("NeuroCog/Walk-v2", body=body)
+        env = gym.make("NeuroCog/Walk-v3", body=body)
         env.reset(seed=3)
         xs = []
         for _ in range(150):

@@ -53,8 +53,8 @@ def serial_run(out, generations, seconds, seed, pop_size=8):
 
 
 def walk_env_speed_and_energy(seed, seconds, warmup):
-    """Forward speed and sum |tau omega| dt after ``warmup`` in NeuroCog/Walk-v2, zero action."""
-    env = gym.make("NeuroCog/Walk-v2", max_episode_steps=None)
+    """Forward speed and sum |tau omega| dt after ``warmup`` in NeuroCog/Walk-v3, zero action."""
+    env = gym.make("NeuroCog/Walk-v3", max_episode_steps=None)
     env.reset(seed=seed)
     base = env.unwrapped
     n, w = int(round(seconds / base.dt)), int(round(warmup / base.dt))

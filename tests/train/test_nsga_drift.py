@@ -16,7 +16,7 @@ from neurocog_gym.train.nsga import CPGProblem, NSGAConfig, choose_gait, read_hi
 
 
 def _env_drift_and_heading(seed, seconds, warmup):
-    env = gym.make("NeuroCog/Walk-v2", max_episode_steps=None)
+    env = gym.make("NeuroCog/Walk-v3", max_episode_steps=None)
     env.reset(seed=seed)
     u = env.unwrapped
     n, w = int(round(seconds / u.dt)), int(round(warmup / u.dt))
