@@ -39,12 +39,14 @@ import argparse
 import dataclasses
 import inspect
 import json
+import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_walk import _yaw  # noqa: E402
 from design_gait import TrotDesign, build  # noqa: E402
 
 from neurocog_gym.envs.walk import WalkEnv  # noqa: E402
@@ -280,10 +282,10 @@ def avoid_stats(design: TrotDesign, seed: int, gait=None) -> dict:
     xy0, yaw0 = None, 0.0
     for _ in range(int(round(seconds / env.dt))):
         t = env.data.time
-        yaw = _yaw(env.data.qpos[3:7])
         if xy0 is None and t >= 2.0:
-            xy0, yaw0 = env.data.qpos[:2].copy(), yaw
-        ey = float(np.remainder(yaw - yaw0 + np.pi, 2 * np.pi) - np.pi)
+            xy0, yaw0 = env.data.qpos[:2].copy(), _yaw(env.data.qpos[3:7])
+        # heading error as the teacher takes it (SuddenAvoidance.update)
+        ey = math.remainder(_yaw(env.data.qpos[3:7]) - yaw0, 2.0 * math.pi)
         if xy0 is None or t >= t_side:
             action[12:] = 0.0
         elif t < t_rev:
@@ -297,14 +299,9 @@ def avoid_stats(design: TrotDesign, seed: int, gait=None) -> dict:
             return {"fell": True, "t": env.data.time}
     d = env.data.qpos[:2] - xy0
     left = -np.sin(yaw0) * d[0] + np.cos(yaw0) * d[1]
-    ey = float(np.remainder(_yaw(env.data.qpos[3:7]) - yaw0 + np.pi, 2 * np.pi) - np.pi)
+    ey = math.remainder(_yaw(env.data.qpos[3:7]) - yaw0, 2.0 * math.pi)
     env.close()
     return {"fell": False, "t": seconds, "side": float(side * left), "heading": abs(ey)}
-
-
-def _yaw(q: np.ndarray) -> float:
-    w, x, y, z = q
-    return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
 
 
 def cost(
